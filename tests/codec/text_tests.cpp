@@ -35,6 +35,8 @@ TEST(Version, SheetExample) {
   EXPECT_EQ(format_version({1, 2, 'e'}), "1.02e");
   EXPECT_EQ(format_version({1, 2, 0}), "1.02");
   EXPECT_EQ(format_version({12, 345 % 256, 'b'}), "12.89b");
+  EXPECT_EQ(format_version({1, 2, static_cast<char>(0x80)}), "1.02[0x80]");
+  EXPECT_EQ(format_version({1, 2, ' '}), "1.02[0x20]");
 }
 
 TEST(Names, EnumsAndErrors) {

@@ -282,7 +282,14 @@ std::string format_version(const SoftwareVersion& version) {
   std::array<char, 32> text{};
   std::snprintf(text.data(), text.size(), "%u.%02u", version.major, version.minor);
   std::string result = text.data();
-  if (version.test != 0) result += version.test;
+  const auto test = static_cast<unsigned char>(version.test);
+  if (test >= 0x21 && test <= 0x7E) {
+    result += version.test;
+  } else if (test != 0) {
+    // Keep the text printable ASCII (it ends up in JSON and DDS strings); show the raw byte.
+    std::snprintf(text.data(), text.size(), "[0x%02X]", test);
+    result += text.data();
+  }
   return result;
 }
 

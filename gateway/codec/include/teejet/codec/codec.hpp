@@ -73,7 +73,8 @@ std::string format_serial(std::uint32_t serial);
 // Accepts "TJV123456", "tjv123456" or "123456"; the number must fit 24 bits.
 Result<std::uint32_t> parse_serial(std::string_view text);
 
-// {1, 2, 'e'} -> "1.02e"; {1, 2, 0} -> "1.02". The minor number has at least two digits.
+// {1, 2, 'e'} -> "1.02e"; {1, 2, 0} -> "1.02". The minor number has at least two digits; a
+// test character that is not printable ASCII shows as its byte: {1, 2, 0x80} -> "1.02[0x80]".
 std::string format_version(const SoftwareVersion& version);
 
 std::string_view to_string(Direction direction);        // "open" / "close"
