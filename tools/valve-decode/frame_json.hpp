@@ -1,0 +1,33 @@
+#pragma once
+
+// JSON Lines rendering of decoded valve frames, as printed by valve-decode.
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+#include "teejet/candump/log_line.hpp"
+#include "teejet/codec/codec.hpp"
+
+namespace teejet::valve_decode {
+
+// The frame alone, for tools that put their own context around it:
+//   {"dir":"from_valve","addr":216,"msg":"position","fields":{"degrees":90.0}}
+// "addr" is the valve's address whichever way the frame goes; "fields" is {} for messages
+// without fields.
+nlohmann::ordered_json frame_json(const codec::DecodedFrame& frame);
+
+// A candump timestamp as a JSON number with exactly the logged digits: 7 -> "1700000000.000007".
+// Written as text because no double prints back every microsecond timestamp digit for digit
+// (nlohmann gives 1700000000.0001931 for 1700000000.000193 and drops trailing zeros).
+std::string timestamp_json_number(std::uint64_t seconds, std::uint32_t microseconds);
+
+// One output line, without the newline:
+//   {"t":1700000000.000123,"iface":"can0", followed by the members of frame_json}
+std::string record_json_line(const candump::LogRecord& record, const codec::DecodedFrame& frame);
+
+// {"error":"<reason>","line":"<line>"}, without the newline.
+std::string error_json_line(std::string_view reason, std::string_view line);
+
+}  // namespace teejet::valve_decode
