@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs the build into a scratch prefix, then builds and runs a consumer project against it
+# the way an ECU project would, and runs the installed valve-decode on the sample trace.
+# Usage: install_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+build_dir=$1
+source_dir=$2
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+
+cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
+
+for f in bin/valve-decode share/teejet/idl/valve.idl include/teejet/valve.h \
+  include/teejet/valvePubSubTypes.h include/teejet/valveTypeObject.h \
+  include/teejet/codec/codec.hpp lib/cmake/TeejetDds/TeejetDdsConfig.cmake; do
+  [ -e "$scratch/prefix/$f" ] || { echo "FAIL: not installed: $f"; exit 1; }
+done
+
+cmake -S "$source_dir/tests/install/consumer" -B "$scratch/consumer" \
+  -DCMAKE_PREFIX_PATH="$scratch/prefix" >/dev/null
+cmake --build "$scratch/consumer" >/dev/null
+output=$("$scratch/consumer/consumer")
+[ "$output" = "TJV123456 123.4" ] || { echo "FAIL: consumer printed '$output'"; exit 1; }
+
+decoded=$(echo '(1700000000.000123) can0 18EFD5D8#020384' | "$scratch/prefix/bin/valve-decode")
+expected='{"t":1700000000.000123,"iface":"can0","dir":"from_valve","addr":216,"msg":"position","fields":{"degrees":90.0}}'
+[ "$decoded" = "$expected" ] || { echo "FAIL: installed valve-decode printed '$decoded'"; exit 1; }
+echo "installed package: consumer built and ran, valve-decode decoded"
