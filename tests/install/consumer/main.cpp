@@ -1,10 +1,10 @@
 // Uses only installed headers: the generated types, their type objects and the codec.
-#include <teejet/codec/codec.hpp>
 #include <teejet/valvePubSubTypes.h>
 #include <teejet/valveTypeObject.h>
 
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <iostream>
+#include <teejet/codec/codec.hpp>
 
 int main() {
   registervalveTypes();
