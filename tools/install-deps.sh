@@ -13,6 +13,7 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   cmake
+  gcc
   g++
   make
   ninja-build

@@ -1,0 +1,47 @@
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <deque>
+#include <mutex>
+
+#include "teejet/can/bus.hpp"
+
+namespace teejet::can {
+
+struct SocketCanOptions {
+  std::vector<Filter> filters;  // kernel filters (CAN_RAW_FILTER); empty: every extended frame
+  std::size_t retry_queue_limit = 32;  // frames kept for retry after ENOBUFS; beyond: refused
+  std::chrono::milliseconds reopen_backoff_min{100};  // after ENODEV, first reopen attempt
+  std::chrono::milliseconds reopen_backoff_max{1000};
+};
+
+// CAN_RAW socket on a Linux SocketCAN interface (can0, vcan0). Kernel filters keep foreign
+// frames out of the process, own frames are not received back, every frame carries the
+// kernel's receive timestamp, error frames become BusState and error counters, and the kernel's
+// drop counter (SO_RXQ_OVFL) shows as rx_dropped. Link faults are survived: after ENETDOWN the
+// socket is kept and works again when the link comes back up; after ENODEV (interface deleted)
+// it is closed and reopened with backoff until the interface returns.
+class SocketCanBus final : public Bus {
+ public:
+  explicit SocketCanBus(std::string interface_name, SocketCanOptions options = {});
+  ~SocketCanBus() override;
+  SocketCanBus(const SocketCanBus&) = delete;
+  SocketCanBus& operator=(const SocketCanBus&) = delete;
+
+  const std::string& name() const override { return interface_; }
+  Status open() override;
+  void close() override;
+  Status send(const codec::CanFrame& frame) override;
+  std::optional<TimedFrame> receive(std::chrono::milliseconds timeout) override;
+  BusStatistics statistics() const override;
+
+ private:
+  const std::string interface_;
+  const SocketCanOptions options_;
+  // Implementation state (socket, retry queue, statistics) lives in the .cpp.
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace teejet::can

@@ -1,0 +1,64 @@
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <deque>
+#include <memory>
+#include <mutex>
+
+#include "teejet/can/bus.hpp"
+
+namespace teejet::can {
+
+// One endpoint on a named in-process bus. Every endpoint opened with the same name shares the
+// medium: a frame sent by one is delivered to every other endpoint whose filters accept it, as
+// SocketCAN delivers to other sockets but not back to the sender. No root, no kernel, no vcan:
+// this is the bus of unit tests, the embedded simulator and the demo.
+struct VirtualBusOptions {
+  std::vector<Filter> filters;  // empty: receive everything
+  std::shared_ptr<const Clock> clock = system_clock();
+  std::size_t queue_limit = 4096;  // frames beyond this are dropped and counted, like the kernel
+};
+
+class VirtualBus final : public Bus {
+ public:
+  using Options = VirtualBusOptions;
+
+  explicit VirtualBus(std::string bus_name, Options options = {});
+  ~VirtualBus() override;
+  VirtualBus(const VirtualBus&) = delete;
+  VirtualBus& operator=(const VirtualBus&) = delete;
+
+  const std::string& name() const override { return name_; }
+  Status open() override;
+  void close() override;
+  Status send(const codec::CanFrame& frame) override;
+  std::optional<TimedFrame> receive(std::chrono::milliseconds timeout) override;
+  BusStatistics statistics() const override;
+
+  // Delivers a frame to this endpoint only, as if it had come from the bus (filters apply).
+  void inject(const codec::CanFrame& frame);
+
+  // Fault injection for every endpoint of a named bus: a link that is down refuses sends and
+  // reports BusState::kDown; the controller state and error counters show in statistics().
+  static void set_link_up(const std::string& bus_name, bool up);
+  static void set_controller_state(const std::string& bus_name, BusState state,
+                                   std::uint16_t tx_errors, std::uint16_t rx_errors);
+
+ private:
+  struct Medium;
+  static std::shared_ptr<Medium> medium_named(const std::string& name);
+  void deliver(const codec::CanFrame& frame);
+
+  const std::string name_;
+  const Options options_;
+  std::shared_ptr<Medium> medium_;
+
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::deque<TimedFrame> queue_;
+  BusStatistics statistics_;
+  bool open_ = false;
+};
+
+}  // namespace teejet::can
