@@ -1,0 +1,447 @@
+// The gateway engine against a virtual bus: what an ECU would see on DDS and what a valve would
+// see on CAN.
+
+#include <gtest/gtest.h>
+
+#include "teejet/bridge/bridge.hpp"
+#include "teejet/can/virtual_bus.hpp"
+
+namespace teejet::bridge {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr Timestamp kStart = 1'700'000'000s;
+
+struct RecordingSink : Sink {
+  std::vector<ValvePresence> presences;
+  std::vector<TelemetrySample> samples;
+  std::vector<std::pair<std::uint32_t, ErrorKind>> cleared;
+  std::vector<CommandStatus> statuses;
+  std::vector<GatewayStatus> gateway;
+
+  void presence(const ValvePresence& s) override { presences.push_back(s); }
+  void telemetry(const TelemetrySample& s) override { samples.push_back(s); }
+  void error_cleared(std::uint32_t serial, ErrorKind kind) override {
+    cleared.emplace_back(serial, kind);
+  }
+  void command_status(const CommandStatus& s) override { statuses.push_back(s); }
+  void gateway_status(const GatewayStatus& s) override { gateway.push_back(s); }
+
+  std::vector<CommandState> states_of(std::uint32_t command_id) const {
+    std::vector<CommandState> out;
+    for (const auto& s : statuses) {
+      if (s.command_id() == command_id) out.push_back(s.state());
+    }
+    return out;
+  }
+  std::string last_reason() const { return statuses.back().reason().to_string(); }
+};
+
+class BridgeTest : public ::testing::Test {
+ protected:
+  BridgeTest() {
+    EXPECT_TRUE(gateway_bus.open());
+    EXPECT_TRUE(valve_side.open());
+  }
+
+  BridgeConfig config() {
+    BridgeConfig c;
+    c.gateway_name = "gw-test";
+    c.can_interface = "virtual:" + bus_name;
+    return c;
+  }
+
+  // Frames the bridge put on the bus, as the valves see them.
+  std::vector<codec::CanFrame> sent() {
+    std::vector<codec::CanFrame> frames;
+    while (auto f = valve_side.receive(0ms)) frames.push_back(f->frame);
+    return frames;
+  }
+
+  static can::TimedFrame from_valve(std::uint8_t address, const codec::FromValveMessage& message,
+                                    Timestamp at) {
+    return {codec::encode(address, message).value(), at};
+  }
+
+  void announce(Bridge& bridge, std::uint8_t address, std::uint32_t serial, Timestamp at) {
+    bridge.on_frame(from_valve(address, codec::IAmHere{0x000123, serial, false}, at));
+  }
+
+  static ValveCommand command(std::uint32_t serial, std::uint32_t id, CommandKind kind) {
+    ValveCommand c;
+    c.serial(serial);
+    c.command_id(id);
+    c.origin("test-ecu");
+    c.kind(kind);
+    c.speed_percent(100);
+    c.direction(DIRECTION_OPEN);
+    return c;
+  }
+
+  static ValveCommand target(std::uint32_t serial, std::uint32_t id, float degrees) {
+    auto c = command(serial, id, COMMAND_TARGET_DEGREES);
+    c.degrees(degrees);
+    return c;
+  }
+
+  std::string bus_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  can::VirtualBus gateway_bus{bus_name, {.filters = can::controller_side_filters()}};
+  can::VirtualBus valve_side{bus_name, {.filters = can::valve_side_filters()}};
+  RecordingSink sink;
+};
+
+TEST_F(BridgeTest, IAmHerePublishesPresenceAndArmsThePollSchedule) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 123456, kStart);
+
+  ASSERT_EQ(sink.presences.size(), 1u);
+  const auto& presence = sink.presences[0];
+  EXPECT_EQ(presence.serial(), 123456u);
+  EXPECT_EQ(presence.address(), 0xD8);
+  EXPECT_TRUE(presence.online());
+  EXPECT_EQ(presence.part_number(), 0x000123u);
+  EXPECT_EQ(presence.last_seen_ns(), static_cast<std::uint64_t>(kStart.count()));
+  EXPECT_EQ(presence.gateway().to_string(), "gw-test");
+
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 9u);
+  const std::vector<std::pair<std::uint8_t, std::uint8_t>> expected{
+      {0x10, 0xFF}, {0x11, 1},  {0x12, 10}, {0x13, 10}, {0x14, 10},
+      {0x15, 10},   {0x16, 10}, {0x17, 50}, {0x18, 50}};
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    EXPECT_EQ(frames[i].id, 0x18EFD8D5u);
+    EXPECT_EQ(frames[i].data[0], expected[i].first);
+    EXPECT_EQ(frames[i].data[1], expected[i].second);
+  }
+}
+
+TEST_F(BridgeTest, HeartbeatsRefreshPresenceWithoutPollingAgain) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  (void)sent();
+  announce(bridge, 0xD8, 1, kStart + 1s);
+  EXPECT_TRUE(sent().empty());
+  ASSERT_EQ(sink.presences.size(), 2u);
+  EXPECT_EQ(sink.presences[1].last_seen_ns(), static_cast<std::uint64_t>((kStart + 1s).count()));
+}
+
+TEST_F(BridgeTest, TelemetryIsPublishedForTheSerialStampedWithReceiveTime) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD9, 4711, kStart);
+  bridge.on_frame(from_valve(0xD9, codec::Position{123.4}, kStart + 5ms));
+  ASSERT_EQ(sink.samples.size(), 1u);
+  const auto& position = std::get<ValvePosition>(sink.samples[0]);
+  EXPECT_EQ(position.serial(), 4711u);
+  EXPECT_FLOAT_EQ(position.degrees(), 123.4f);
+  EXPECT_EQ(position.received_ns(), static_cast<std::uint64_t>((kStart + 5ms).count()));
+}
+
+TEST_F(BridgeTest, TelemetryFromAnUnannouncedAddressIsCountedNotGuessed) {
+  Bridge bridge(config(), gateway_bus, sink);
+  bridge.on_frame(from_valve(0xE0, codec::Position{10.0}, kStart));
+  EXPECT_TRUE(sink.samples.empty());
+  EXPECT_EQ(bridge.counters().unattributed, 1u);
+}
+
+TEST_F(BridgeTest, MalformedFramesAreCountedAndReportedInGatewayStatus) {
+  Bridge bridge(config(), gateway_bus, sink);
+  codec::CanFrame short_position{.id = 0x18EFD5D8, .dlc = 2, .data = {0x02, 0x01}};
+  bridge.on_frame({short_position, kStart});
+  EXPECT_EQ(bridge.counters().decode_errors, 1u);
+  EXPECT_EQ(bridge.counters().last_decode_error, "position needs 3 bytes, got 2");
+  bridge.tick(kStart);
+  ASSERT_EQ(sink.gateway.size(), 1u);
+  EXPECT_EQ(sink.gateway[0].decode_errors(), 1u);
+  EXPECT_EQ(sink.gateway[0].gateway().to_string(), "gw-test");
+}
+
+TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 500, kStart);
+  (void)sent();
+  announce(bridge, 0xDA, 500, kStart + 1s);  // a valve with a lower serial joined
+  EXPECT_EQ(sink.presences.back().address(), 0xDA);
+  const auto repoll = sent();
+  ASSERT_EQ(repoll.size(), 9u);
+  EXPECT_EQ(repoll[0].id, 0x18EFDAD5u);
+
+  bridge.on_frame(from_valve(0xDA, codec::Position{45.0}, kStart + 1100ms));
+  EXPECT_EQ(std::get<ValvePosition>(sink.samples.back()).serial(), 500u);
+
+  bridge.on_command(command(500, 1, COMMAND_STOP), kStart + 2s);
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].id, 0x18EFDAD5u);
+  EXPECT_EQ(frames[0].data[0], 0x00);
+}
+
+TEST_F(BridgeTest, OfflineAfterThreeSecondsWithoutIAmHere) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 9, kStart);
+  bridge.tick(kStart + 3s);
+  EXPECT_TRUE(sink.presences.back().online());
+  bridge.tick(kStart + 3s + 1ms);
+  EXPECT_FALSE(sink.presences.back().online());
+  EXPECT_EQ(sink.presences.back().serial(), 9u);
+
+  (void)sent();
+  bridge.on_command(command(9, 7, COMMAND_STOP), kStart + 4s);
+  EXPECT_EQ(sink.states_of(7), std::vector{COMMAND_REJECTED});
+  EXPECT_EQ(sink.last_reason(), "valve TJV000009 is offline");
+  EXPECT_TRUE(sent().empty());
+
+  announce(bridge, 0xD8, 9, kStart + 5s);
+  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_EQ(sent().size(), 9u);  // polling re-armed
+}
+
+TEST_F(BridgeTest, CommandsForSerialsThisGatewayDoesNotHaveAreIgnoredSilently) {
+  Bridge bridge(config(), gateway_bus, sink);
+  bridge.on_command(command(999, 1, COMMAND_STOP), kStart);
+  EXPECT_TRUE(sink.statuses.empty());
+  EXPECT_TRUE(sent().empty());
+  EXPECT_EQ(bridge.counters().commands_ignored, 1u);
+  EXPECT_FALSE(bridge.owns(999));
+}
+
+TEST_F(BridgeTest, OutOfRangeCommandIsRejectedWithReasonAndNeverReachesTheBus) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  (void)sent();
+  bridge.on_command(target(1, 3, 360.0f), kStart);
+  EXPECT_EQ(sink.states_of(3), std::vector{COMMAND_REJECTED});
+  EXPECT_EQ(sink.last_reason(), "target_degrees: degrees 360 is outside 0 to 359.9");
+  auto fast = command(1, 4, COMMAND_MANUAL);
+  fast.speed_percent(101);
+  bridge.on_command(fast, kStart);
+  EXPECT_EQ(sink.last_reason(), "manual: speed_percent 101 is outside 0 to 100");
+  auto shortest = command(1, 5, COMMAND_DEGREES_FROM_POSITION);
+  shortest.direction(DIRECTION_SHORTEST);
+  bridge.on_command(shortest, kStart);
+  EXPECT_EQ(sink.last_reason(),
+            "degrees_from_position: direction SHORTEST exists only for Target Degrees");
+  EXPECT_TRUE(sent().empty());
+  EXPECT_EQ(bridge.counters().commands_rejected, 3u);
+}
+
+TEST_F(BridgeTest, TargetMoveIsSentThenCompletedFromPositionTelemetry) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
+  (void)sent();
+
+  bridge.on_command(target(1, 10, 90.0f), kStart + 10ms);
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  const std::array<std::uint8_t, 8> expected{0x02, 100, 0x01, 0x03, 0x84, 0xFF, 0xFF, 0xFF};
+  EXPECT_EQ(frames[0].data, expected);
+  EXPECT_EQ(sink.states_of(10), std::vector{COMMAND_ACCEPTED});
+
+  bridge.on_frame(from_valve(0xD8, codec::Position{45.0}, kStart + 500ms));
+  EXPECT_EQ(sink.states_of(10), std::vector{COMMAND_ACCEPTED});
+  bridge.on_frame(from_valve(0xD8, codec::Position{89.5}, kStart + 1000ms));  // within 1.0
+  EXPECT_EQ(sink.states_of(10), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(sink.statuses.back().stamp_ns(), static_cast<std::uint64_t>((kStart + 1s).count()));
+}
+
+TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
+  bridge.on_frame(from_valve(0xD8, codec::DegreesPerSecond{90, codec::Direction::kOpen}, kStart));
+  bridge.on_command(target(1, 11, 90.0f), kStart);  // ETA 1 s at 90 dps, plus a 3 s margin
+  bridge.on_frame(from_valve(0xD8, codec::Position{30.0}, kStart + 1s));
+  announce(bridge, 0xD8, 1, kStart + 2s);
+  announce(bridge, 0xD8, 1, kStart + 3s);
+  bridge.tick(kStart + 3999ms);
+  EXPECT_EQ(sink.states_of(11), std::vector{COMMAND_ACCEPTED});
+  bridge.tick(kStart + 4s);
+  EXPECT_EQ(sink.states_of(11), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(sink.states_of(11).size(), 2u);
+  const auto& last = sink.statuses.back();
+  EXPECT_EQ(last.reason().to_string(), "position 30.0 did not reach 90.0 in time");
+}
+
+TEST_F(BridgeTest, ANewCommandSupersedesTheRunningOne) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
+  bridge.on_command(target(1, 20, 90.0f), kStart);
+  bridge.on_command(target(1, 21, 10.0f), kStart + 100ms);
+  EXPECT_EQ(sink.states_of(20), (std::vector{COMMAND_ACCEPTED, COMMAND_SUPERSEDED}));
+  EXPECT_EQ(sink.states_of(21), std::vector{COMMAND_ACCEPTED});
+  const auto superseded = std::find_if(sink.statuses.begin(), sink.statuses.end(),
+                                       [](auto& s) { return s.state() == COMMAND_SUPERSEDED; });
+  EXPECT_EQ(superseded->reason().to_string(), "replaced by command 21 from test-ecu");
+}
+
+TEST_F(BridgeTest, DegreesFromPositionCompletesAtTheRelativeTarget) {
+  auto c = config();
+  c.default_limits = ValveLimits{0.0, 90.0};
+  Bridge bridge(c, gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{80.0}, kStart));
+  auto relative = command(1, 30, COMMAND_DEGREES_FROM_POSITION);
+  relative.degrees(45.0f);  // 125 clamps to the opened limit, 90
+  bridge.on_command(relative, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{90.0}, kStart + 200ms));
+  EXPECT_EQ(sink.states_of(30), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, FullTurnValveWrapsRelativeTargets) {
+  auto c = config();
+  c.limits[1] = ValveLimits{0.0, 360.0};
+  Bridge bridge(c, gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{350.0}, kStart));
+  auto relative = command(1, 31, COMMAND_DEGREES_FROM_POSITION);
+  relative.degrees(20.0f);  // 370 wraps to 10
+  bridge.on_command(relative, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::Position{9.6}, kStart + 300ms));
+  EXPECT_EQ(sink.states_of(31), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, MillisecondsToRunCompletesWhenItsTimeIsUp) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  auto jog = command(1, 40, COMMAND_MILLISECONDS_TO_RUN);
+  jog.milliseconds(1500);
+  bridge.on_command(jog, kStart);
+  bridge.tick(kStart + 1499ms);
+  EXPECT_EQ(sink.states_of(40), std::vector{COMMAND_ACCEPTED});
+  bridge.tick(kStart + 1500ms);
+  EXPECT_EQ(sink.states_of(40), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, StopAndClearErrorsCompleteOnceSent) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_command(command(1, 50, COMMAND_STOP), kStart);
+  EXPECT_EQ(sink.states_of(50), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, ErrorsAreLatchedUntilClearErrors) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.on_frame(from_valve(0xD8, codec::HighVoltageError{17.2, 16.5}, kStart));
+  bridge.on_frame(from_valve(0xD8, codec::HighTemperatureError{90, 85}, kStart));
+  const auto& error = std::get<ValveError>(sink.samples.at(0));
+  EXPECT_EQ(error.kind(), ERROR_HIGH_VOLTAGE);
+  EXPECT_FLOAT_EQ(error.value(), 17.2f);
+  EXPECT_TRUE(sink.cleared.empty());
+
+  (void)sent();
+  bridge.on_command(command(1, 60, COMMAND_CLEAR_ERRORS), kStart + 1s);
+  EXPECT_EQ(sent().at(0).data[0], 0x04);
+  const std::vector<std::pair<std::uint32_t, ErrorKind>> cleared{{1, ERROR_HIGH_VOLTAGE},
+                                                                 {1, ERROR_HIGH_TEMPERATURE}};
+  EXPECT_EQ(sink.cleared, cleared);
+}
+
+TEST_F(BridgeTest, RequestCompletesWhenTheReplyArrivesOrTimesOut) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  (void)sent();
+  auto version = command(1, 70, COMMAND_REQUEST);
+  version.telemetry(TELEMETRY_VERSION);
+  bridge.on_command(version, kStart);
+  EXPECT_EQ(sent().at(0).data[0], 0x10);
+  bridge.on_frame(from_valve(0xD8, codec::VersionInfo{{1, 2, 'e'}, {1, 0, 0}}, kStart + 20ms));
+  EXPECT_EQ(sink.states_of(70), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+
+  auto voltage = command(1, 71, COMMAND_REQUEST);
+  voltage.telemetry(TELEMETRY_VOLTAGE);
+  bridge.on_command(voltage, kStart + 1s);
+  bridge.tick(kStart + 3s);
+  EXPECT_EQ(sink.states_of(71), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(sink.last_reason(), "no reply within 2000 ms");
+}
+
+TEST_F(BridgeTest, BaudRateChangeIsRefusedUnlessAllowed) {
+  {
+    Bridge bridge(config(), gateway_bus, sink);
+    announce(bridge, 0xD8, 1, kStart);
+    (void)sent();
+    auto baud = command(1, 80, COMMAND_SET_BAUD_RATE);
+    baud.bit_rate(500000);
+    bridge.on_command(baud, kStart);
+    EXPECT_EQ(sink.states_of(80), std::vector{COMMAND_REJECTED});
+    EXPECT_EQ(sink.last_reason(),
+              "setting the baud rate is not allowed; start the gateway with --allow-baud-change");
+    EXPECT_TRUE(sent().empty());
+    bridge.on_command(command(1, 81, COMMAND_REQUEST_BAUD_RATE), kStart);  // asking is fine
+    EXPECT_EQ(sent().at(0).data[1], 0x55);
+  }
+  auto c = config();
+  c.allow_baud_change = true;
+  Bridge bridge(c, gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  (void)sent();
+  auto baud = command(1, 82, COMMAND_SET_BAUD_RATE);
+  baud.bit_rate(500000);
+  bridge.on_command(baud, kStart);
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].data[0], 0x93);
+  EXPECT_EQ(frames[0].data[1], 0xA5);
+  EXPECT_EQ(frames[0].data[2], 0x01);
+  bridge.on_frame(from_valve(0xD8, codec::BaudRateReply{500000}, kStart + 10ms));
+  EXPECT_EQ(sink.states_of(82), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, SendFailureRejectsTheCommandVisibly) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  can::VirtualBus::set_link_up(bus_name, false);
+  bridge.on_command(command(1, 90, COMMAND_STOP), kStart);
+  EXPECT_EQ(sink.states_of(90), std::vector{COMMAND_REJECTED});
+  EXPECT_EQ(sink.last_reason(), "CAN send failed: " + bus_name + ": link is down");
+  can::VirtualBus::set_link_up(bus_name, true);
+}
+
+TEST_F(BridgeTest, StopAllStopsEveryOnlineValve) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  announce(bridge, 0xD9, 2, kStart);
+  announce(bridge, 0xDA, 3, kStart - 10s);  // long gone
+  bridge.tick(kStart);
+  (void)sent();
+  EXPECT_EQ(bridge.stop_all(kStart), 2u);
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].id, 0x18EFD8D5u);
+  EXPECT_EQ(frames[1].id, 0x18EFD9D5u);
+  EXPECT_EQ(frames[0].data[0], 0x00);
+}
+
+TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  announce(bridge, 0xD9, 2, kStart);
+  bridge.on_command(command(1, 100, COMMAND_MANUAL), kStart, "writer-a");
+  bridge.on_command(command(2, 101, COMMAND_MANUAL), kStart, "writer-b");
+  (void)sent();
+  EXPECT_EQ(bridge.stop_commanded_by("writer-a", kStart + 1s), 1u);
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].id, 0x18EFD8D5u);
+  EXPECT_EQ(sink.states_of(100), (std::vector{COMMAND_ACCEPTED, COMMAND_SUPERSEDED}));
+  EXPECT_EQ(sink.states_of(101), std::vector{COMMAND_ACCEPTED});
+}
+
+TEST_F(BridgeTest, GatewayStatusOnceASecond) {
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  bridge.tick(kStart);
+  bridge.tick(kStart + 500ms);
+  bridge.tick(kStart + 1s);
+  ASSERT_EQ(sink.gateway.size(), 2u);
+  EXPECT_EQ(sink.gateway[1].valves_online(), 1u);
+  EXPECT_EQ(sink.gateway[1].valves_known(), 1u);
+  EXPECT_EQ(sink.gateway[1].frames_out(), 9u);
+  EXPECT_EQ(sink.gateway[1].bus_state(), BUS_ERROR_ACTIVE);
+}
+
+}  // namespace
+}  // namespace teejet::bridge
