@@ -1,0 +1,266 @@
+// Configuration: validation, the --inject-error syntax, the YAML file and how the command line
+// and the file compose into a bank.
+
+#include <gtest/gtest.h>
+
+#include "teejet/codec/codec.hpp"
+#include "teejet/sim/setup.hpp"
+
+namespace teejet::sim {
+namespace {
+
+bool mentions(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// ---- ValveConfig ---------------------------------------------------------------------------
+
+TEST(SimSetup, DefaultConfigurationIsValid) {
+  EXPECT_TRUE(validate(ValveConfig{}));
+  ValveConfig full_turn;
+  full_turn.opened_degrees = 360;
+  full_turn.start_degrees = 359.9;
+  EXPECT_TRUE(validate(full_turn));
+}
+
+TEST(SimSetup, InvalidConfigurationsNameTheValveAndTheField) {
+  const auto refused = [](auto change, const std::string& expected) {
+    ValveConfig config;
+    config.serial = 42;
+    change(config);
+    const auto status = validate(config);
+    EXPECT_FALSE(status) << expected;
+    EXPECT_TRUE(mentions(status.reason(), expected)) << status.reason();
+    if (config.serial <= kMaxSerial) {
+      EXPECT_TRUE(mentions(status.reason(), "TJV000042")) << status.reason();
+    }
+  };
+  refused([](ValveConfig& c) { c.opened_degrees = 341; }, "at most 340");
+  refused([](ValveConfig& c) { c.opened_degrees = 400; }, "neither 360");
+  refused([](ValveConfig& c) { c.closed_degrees = 90; }, "below opened");
+  refused([](ValveConfig& c) { c.closed_degrees = -1; }, "at least 0");
+  refused([](ValveConfig& c) { c.degrees_per_second = 0; }, "degrees per second");
+  refused([](ValveConfig& c) { c.degrees_per_second = 360; }, "degrees per second");
+  refused([](ValveConfig& c) { c.start_degrees = 91; }, "start position");
+  refused([](ValveConfig& c) { c.volts = 17; }, "volts");
+  refused([](ValveConfig& c) { c.valve_temperature_c = 128; }, "temperature");
+  refused([](ValveConfig& c) { c.running_amps = -1; }, "running amps");
+  refused([](ValveConfig& c) { c.bit_rate = 125000; }, "bit rate");
+  refused([](ValveConfig& c) { c.part_number = 0x1000000; }, "part number");
+  refused([](ValveConfig& c) { c.application_version.minor = 256; }, "version");
+  refused([](ValveConfig& c) { c.serial = 0x1000000; }, "24 bits");
+}
+
+// ---- --inject-error ------------------------------------------------------------------------
+
+TEST(SimSetup, ErrorSpecsParse) {
+  const auto high_voltage = parse_error_spec("TJV000001:high-voltage:16.2:15.5");
+  ASSERT_TRUE(high_voltage) << high_voltage.error().reason;
+  EXPECT_EQ(*high_voltage, (SerialError{1, {ErrorKind::kHighVoltage, 16.2, 15.5}}));
+  const auto min_dps = parse_error_spec("123456:min_dps:20:30:close");
+  ASSERT_TRUE(min_dps) << min_dps.error().reason;
+  EXPECT_EQ(
+      *min_dps,
+      (SerialError{123456, {ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose}}));
+  for (const auto* kind : {"high-voltage", "low-voltage", "high-current", "low-current",
+                           "high-temperature", "min-dps"}) {
+    const auto parsed = parse_error_spec(std::string("7:") + kind + ":1:2");
+    ASSERT_TRUE(parsed) << kind;
+    EXPECT_EQ(to_string(parsed->error.kind), kind);
+  }
+}
+
+TEST(SimSetup, BadErrorSpecsSayWhatIsWrong) {
+  const auto reason = [](std::string_view spec) {
+    const auto parsed = parse_error_spec(spec);
+    EXPECT_FALSE(parsed) << spec;
+    return parsed ? std::string() : parsed.error().reason;
+  };
+  EXPECT_TRUE(mentions(reason("1:high-voltage:16"), "SERIAL:KIND:VALUE:LIMIT"));
+  EXPECT_TRUE(mentions(reason("x:high-voltage:16:15"), "serial 'x'"));
+  EXPECT_TRUE(mentions(reason("1:sparks:16:15"), "unknown error kind 'sparks'"));
+  EXPECT_TRUE(mentions(reason("1:high-voltage:hot:15"), "must be numbers"));
+  EXPECT_TRUE(mentions(reason("1:high-voltage:16:15:open"), "only min-dps"));
+  EXPECT_TRUE(mentions(reason("1:min-dps:16:15:up"), "open or close"));
+  EXPECT_TRUE(mentions(reason("1:high-temperature:130:100"), "high-temperature"));
+  EXPECT_TRUE(mentions(reason("1:high-temperature:90.5:100"), "whole numbers"));
+  EXPECT_TRUE(mentions(reason("1:low-current:-1:1"), "at least 0"));
+}
+
+TEST(SimSetup, VersionsAndRotationsParse) {
+  EXPECT_EQ(*parse_version("1.02e"), (codec::SoftwareVersion{1, 2, 'e'}));
+  EXPECT_EQ(*parse_version("2.10"), (codec::SoftwareVersion{2, 10, 0}));
+  EXPECT_FALSE(parse_version("1"));
+  EXPECT_FALSE(parse_version("1.2ee"));
+  EXPECT_FALSE(parse_version("256.1"));
+  EXPECT_EQ(parse_rotation("counterclockwise"), codec::Rotation::kCounterclockwise);
+  EXPECT_EQ(parse_rotation("cw"), codec::Rotation::kClockwise);
+  EXPECT_FALSE(parse_rotation("left"));
+}
+
+// ---- YAML ----------------------------------------------------------------------------------
+
+constexpr const char* kExample = R"(
+defaults:
+  dps: 120
+  opened: 360
+valves:
+  - serial: TJV123456
+    start: 45
+    opening_direction: counterclockwise
+    part_number: 4711
+    application_version: "1.02e"
+    bootloader_version: "0.09"
+    volts: 12.6
+    valve_temperature: 31
+    sensor_temperature: -2
+    running_amps: 0.85
+    bit_rate: 500k
+    errors:
+      - {kind: high-temperature, value: 95, limit: 85}
+  - serial: 123457
+    opened: 90
+hotplug:
+  - serial: 100
+    dps: 60
+errors:
+  - {serial: 123457, kind: min-dps, value: 20, limit: 30, direction: close}
+)";
+
+TEST(SimSetup, TheExampleFileParses) {
+  const auto file = parse_config(kExample, "example.yaml");
+  ASSERT_TRUE(file) << file.error().reason;
+  EXPECT_EQ(file->defaults.degrees_per_second, 120.0);
+  ASSERT_EQ(file->valves.size(), 2u);
+  const auto& first = file->valves[0];
+  EXPECT_EQ(first.serial, 123456u);
+  EXPECT_EQ(first.start_degrees, 45.0);
+  EXPECT_EQ(first.opening_direction, codec::Rotation::kCounterclockwise);
+  EXPECT_EQ(first.part_number, 4711u);
+  EXPECT_EQ(first.application_version, (codec::SoftwareVersion{1, 2, 'e'}));
+  EXPECT_EQ(first.bootloader_version, (codec::SoftwareVersion{0, 9, 0}));
+  EXPECT_EQ(first.volts, 12.6);
+  EXPECT_EQ(first.valve_temperature_c, 31);
+  EXPECT_EQ(first.sensor_temperature_c, -2);
+  EXPECT_EQ(first.running_amps, 0.85);
+  EXPECT_EQ(first.bit_rate, codec::kBitRate500k);
+  EXPECT_EQ(first.errors, (std::vector<InjectedError>{{ErrorKind::kHighTemperature, 95, 85}}));
+  ASSERT_EQ(file->hotplug.size(), 1u);
+  EXPECT_EQ(file->hotplug[0].serial, 100u);
+  EXPECT_EQ(file->errors,
+            (std::vector<SerialError>{
+                {123457, {ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose}}}));
+}
+
+TEST(SimSetup, AnEmptyFileIsNoSettings) {
+  const auto file = parse_config("", "empty.yaml");
+  ASSERT_TRUE(file);
+  EXPECT_TRUE(file->valves.empty());
+}
+
+TEST(SimSetup, FileMistakesAreRefusedWithTheLine) {
+  const auto reason = [](const std::string& text) {
+    const auto file = parse_config(text, "sim.yaml");
+    EXPECT_FALSE(file) << text;
+    return file ? std::string() : file.error().reason;
+  };
+  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    dsp: 90\n"),
+                       "sim.yaml:3: valves[0]: unknown key 'dsp'"));
+  EXPECT_TRUE(mentions(reason("valve: []\n"), "unknown key 'valve'"));
+  EXPECT_TRUE(mentions(reason("valves:\n  - dps: 90\n"), "needs a serial"));
+  EXPECT_TRUE(mentions(reason("defaults:\n  dps: fast\n"), "'fast' is not a number"));
+  EXPECT_TRUE(mentions(reason("defaults:\n  opening_direction: left\n"), "neither clockwise"));
+  EXPECT_TRUE(mentions(reason("defaults:\n  bit_rate: 1M\n"), "neither 250000"));
+  EXPECT_TRUE(mentions(reason("defaults:\n  valve_temperature: 200\n"), "-127 to 127"));
+  EXPECT_TRUE(mentions(reason("errors:\n  - {kind: high-voltage, value: 1, limit: 2}\n"),
+                       "needs a serial"));
+  EXPECT_TRUE(mentions(reason("errors:\n  - {serial: 1, kind: x, value: 1, limit: 2}\n"),
+                       "unknown error kind 'x'"));
+  EXPECT_TRUE(mentions(reason("defaults: [1, 2]\n"), "expected a mapping"));
+  EXPECT_TRUE(mentions(reason("defaults: {dps: [1\n"), "sim.yaml"));  // YAML syntax error
+}
+
+TEST(SimSetup, MissingFileIsReported) {
+  const auto file = load_config("/nonexistent/teejet-sim.yaml");
+  ASSERT_FALSE(file);
+  EXPECT_TRUE(mentions(file.error().reason, "/nonexistent/teejet-sim.yaml"));
+}
+
+// ---- Composition ---------------------------------------------------------------------------
+
+TEST(SimSetup, ValvesFlagGivesSerialsOneToN) {
+  CommandLine command_line;
+  command_line.valve_count = 3;
+  const auto setup = compose_setup(command_line, {});
+  ASSERT_TRUE(setup) << setup.error().reason;
+  ASSERT_EQ(setup->valves.size(), 3u);
+  EXPECT_EQ(setup->valves[0].serial, 1u);
+  EXPECT_EQ(setup->valves[2].serial, 3u);
+  EXPECT_EQ(setup->valves[2].degrees_per_second, 90.0);
+}
+
+TEST(SimSetup, PrecedenceIsDefaultsThenFileDefaultsThenFlagsThenTheValvesEntry) {
+  const auto file = parse_config(kExample, "example.yaml");
+  ASSERT_TRUE(file);
+  CommandLine command_line;
+  command_line.serials = {123456, 123457, 5};
+  command_line.settings.degrees_per_second = 150;  // beats the file's defaults (120)
+  command_line.settings.volts = 13.0;              // loses to the file's entry for 123456
+  const auto setup = compose_setup(command_line, *file);
+  ASSERT_TRUE(setup) << setup.error().reason;
+  ASSERT_EQ(setup->valves.size(), 3u);
+  const auto& a = setup->valves[0];
+  EXPECT_EQ(a.serial, 123456u);
+  EXPECT_EQ(a.degrees_per_second, 150.0);
+  EXPECT_EQ(a.volts, 12.6);
+  EXPECT_TRUE(a.full_turn());
+  const auto& b = setup->valves[1];
+  EXPECT_EQ(b.opened_degrees, 90.0);
+  EXPECT_EQ(b.volts, 13.0);
+  const auto& c = setup->valves[2];
+  EXPECT_EQ(c.serial, 5u);
+  EXPECT_TRUE(c.full_turn());
+  EXPECT_EQ(setup->errors.size(), 2u);
+  ASSERT_EQ(setup->hotplug.size(), 1u);
+  EXPECT_EQ(setup->hotplug[0].serial, 100u);
+  EXPECT_EQ(setup->hotplug[0].degrees_per_second, 60.0);
+  EXPECT_EQ(setup->base.degrees_per_second, 150.0);
+}
+
+TEST(SimSetup, TheFileAloneCanDefineTheBank) {
+  const auto file = parse_config(kExample, "example.yaml");
+  ASSERT_TRUE(file);
+  const auto setup = compose_setup({}, *file);
+  ASSERT_TRUE(setup) << setup.error().reason;
+  EXPECT_EQ(setup->valves.size(), 2u);
+}
+
+TEST(SimSetup, CompositionMistakesAreRefused) {
+  const auto reason = [](const CommandLine& command_line, const std::string& yaml) {
+    const auto file = parse_config(yaml, "sim.yaml");
+    EXPECT_TRUE(file);
+    const auto setup = compose_setup(command_line, *file);
+    EXPECT_FALSE(setup);
+    return setup ? std::string() : setup.error().reason;
+  };
+  EXPECT_TRUE(mentions(reason({}, ""), "no valves"));
+  CommandLine too_many;
+  too_many.valve_count = 33;
+  EXPECT_TRUE(mentions(reason(too_many, ""), "1 to 32"));
+  CommandLine twice;
+  twice.serials = {4, 4};
+  EXPECT_TRUE(mentions(reason(twice, ""), "TJV000004 is given twice"));
+  CommandLine two;
+  two.valve_count = 2;
+  EXPECT_TRUE(mentions(reason(two, "valves:\n  - serial: 9\n"), "TJV000009, which is not"));
+  auto with_error = two;
+  with_error.errors.push_back({9, {ErrorKind::kHighVoltage, 16, 15}});
+  EXPECT_TRUE(mentions(reason(with_error, ""), "not a simulated valve"));
+  auto bad_flags = two;
+  bad_flags.settings.opened_degrees = 350;
+  EXPECT_TRUE(mentions(reason(bad_flags, ""), "at most 340"));
+  EXPECT_TRUE(mentions(reason(two, "hotplug:\n  - serial: 2\n"), "already in the bank"));
+}
+
+}  // namespace
+}  // namespace teejet::sim

@@ -1,0 +1,53 @@
+#pragma once
+
+// Shared helpers of the simulator tests: times relative to a fixed power-up instant and typed
+// access to replies.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <variant>
+#include <vector>
+
+#include "teejet/codec/messages.hpp"
+#include "teejet/sim/simulated_valve.hpp"
+
+namespace teejet::sim::testing {
+
+using namespace std::chrono_literals;
+
+inline constexpr Timestamp kT0 = std::chrono::seconds(1'700'000'000);
+
+// kT0 + milliseconds.
+constexpr Timestamp at_ms(long long ms) { return kT0 + std::chrono::milliseconds(ms); }
+
+// The only message of `messages`, which must be a T.
+template <class T>
+T only(const std::vector<codec::FromValveMessage>& messages) {
+  EXPECT_EQ(messages.size(), 1u);
+  if (messages.size() != 1 || !std::holds_alternative<T>(messages.front())) {
+    ADD_FAILURE() << "expected exactly one message of the requested type";
+    return T{};
+  }
+  return std::get<T>(messages.front());
+}
+
+// The position the valve reports, in degrees (tenths resolution), at `now`.
+inline double reported_position(SimulatedValve& valve, Timestamp now) {
+  return only<codec::Position>(valve.handle(codec::RequestPosition{0}, now)).degrees;
+}
+
+inline ValveConfig limited_valve(double start = 0.0) {
+  ValveConfig config;
+  config.serial = 123456;
+  config.start_degrees = start;
+  return config;  // dps 90, closed 0, opened 90
+}
+
+inline ValveConfig full_turn_valve(double start = 0.0) {
+  ValveConfig config = limited_valve(start);
+  config.opened_degrees = 360.0;
+  return config;
+}
+
+}  // namespace teejet::sim::testing

@@ -1,0 +1,165 @@
+#!/usr/bin/python3
+"""valve-sim and an independent python-can peer agree.
+
+The peer builds and parses frames itself, straight from the protocol sheet (not with the
+project's codec): I'm Here serials and addresses, Version Information, a move, the position,
+readdressing after SIGUSR1. Runs inside tests/uml/uml-run (root, vcan0 up), with the Debian
+python3 (python3-can). Usage: python_can_peer.py VALVE_SIM
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+try:
+    import can
+except ImportError:
+    print("SKIP: python3-can is not installed for", sys.executable)
+    sys.exit(77)
+
+CONTROLLER = 0xD5
+FAILURES = []
+
+
+def check(condition, what):
+    print(("ok: " if condition else "FAIL: ") + what)
+    if not condition:
+        FAILURES.append(what)
+
+
+def to_valve(address):  # 0x18EF<valve>D5
+    return 0x18EF0000 | address << 8 | CONTROLLER
+
+
+def u16(data, offset):
+    return data[offset] << 8 | data[offset + 1]
+
+
+def u24(data, offset):
+    return data[offset] << 16 | data[offset + 1] << 8 | data[offset + 2]
+
+
+def u32(data, offset):
+    return u24(data, offset) << 8 | data[offset + 3]
+
+
+class Peer:
+    def __init__(self):
+        # Valve to controller only: 0x18EFD5xx.
+        self.bus = can.interface.Bus(
+            channel="vcan0", interface="socketcan",
+            can_filters=[{"can_id": 0x18EFD500, "can_mask": 0x1FFFFF00, "extended": True}])
+
+    def send(self, address, payload):
+        self.bus.send(can.Message(arbitration_id=to_valve(address), data=bytes(payload),
+                                  is_extended_id=True))
+
+    def frames(self, seconds):
+        """Every valve frame for `seconds`: (address, data, timestamp)."""
+        deadline = time.monotonic() + seconds
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            message = self.bus.recv(timeout=left)
+            if message is not None:
+                yield message.arbitration_id & 0xFF, bytes(message.data), message.timestamp
+
+    def reply(self, address, payload, reply_id, timeout=3.0):
+        """Sends payload to the valve and returns the data of its first reply_id frame."""
+        self.send(address, payload)
+        for source, data, _ in self.frames(timeout):
+            if source == address and data and data[0] == reply_id:
+                return data
+        return None
+
+    def i_am_here(self, seconds):
+        """{serial: (address, part number, run mode)} and the stamps of each serial."""
+        valves, stamps = {}, {}
+        for source, data, stamp in self.frames(seconds):
+            if data[0] == 0x00 and len(data) >= 8:
+                serial = u24(data, 4)
+                valves[serial] = (source, u24(data, 1), data[7])
+                stamps.setdefault(serial, []).append(stamp)
+        return valves, stamps
+
+
+def main():
+    valve_sim = sys.argv[1]
+    log = tempfile.NamedTemporaryFile(prefix="valve-sim-peer.", suffix=".log", delete=False)
+    peer = Peer()
+    simulator = subprocess.Popen(
+        [valve_sim, "--can", "vcan0", "--serials", "123457,TJV123456", "--dps", "180"],
+        stdout=log, stderr=subprocess.STDOUT)
+    try:
+        run(peer, simulator)
+    finally:
+        if simulator.poll() is None:
+            simulator.send_signal(signal.SIGTERM)
+            try:
+                code = simulator.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                simulator.kill()
+                code = "killed"
+            check(code == 0, "SIGTERM: valve-sim exits 0 (got %s)" % code)
+        peer.bus.shutdown()
+        log.close()
+        if FAILURES:
+            print("--- valve-sim log")
+            print(open(log.name).read())
+        os.unlink(log.name)
+    if FAILURES:
+        print("%d check(s) failed" % len(FAILURES))
+        sys.exit(1)
+    print("all passed")
+
+
+def run(peer, simulator):
+    # I'm Here: lowest serial at 0xD8, once a second, part number 0, application code.
+    valves, stamps = peer.i_am_here(2.3)
+    check(valves.get(123456) == (0xD8, 0, 0), "TJV123456 announces itself at 0xD8: %s" % valves)
+    check(valves.get(123457) == (0xD9, 0, 0), "TJV123457 announces itself at 0xD9")
+    periods = [b - a for a, b in zip(stamps.get(123456, []), stamps.get(123456, [])[1:])]
+    check(periods and all(0.8 <= p <= 1.2 for p in periods),
+          "I'm Here once a second: %s" % ["%.3f" % p for p in periods])
+
+    data = peer.reply(0xD9, [0x10], 0x01)
+    check(data is not None and list(data[1:7]) == [1, 0, 0, 1, 0, 0],
+          "Version Information: application 1.00, boot loader 1.00 (%s)" % data)
+
+    # Target Degrees 90.0 at 100 %, open: 0x02, speed, direction, degrees x 10 (MSB, LSB).
+    peer.send(0xD9, [0x02, 100, 1, 900 >> 8, 900 & 0xFF])
+    time.sleep(0.8)  # 90 degrees at 180 dps: 0.5 s
+    data = peer.reply(0xD9, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 900, "position after the move: 90.0 degrees")
+    # Degrees from Position: close by 45.0.
+    peer.send(0xD9, [0x03, 50, 0, 450 >> 8, 450 & 0xFF])
+    data = peer.reply(0xD9, [0x16, 0], 0x07)  # while it runs
+    check(data is not None and list(data[1:4]) == [50, 0, 1],
+          "speed 50 %%, closing, opening clockwise while running (%s)" % data)
+    time.sleep(0.8)  # 45 degrees at 90 dps: 0.5 s
+    data = peer.reply(0xD9, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 450, "position after closing 45: 45.0 degrees")
+    data = peer.reply(0xD9, [0x18, 0], 0x09)
+    check(data is not None and u32(data, 1) == 2, "cycle count 2")
+    data = peer.reply(0xD9, [0x15, 0], 0x06)
+    check(data is not None and u16(data, 1) == 180 and data[3] == 0,
+          "180 degrees per second, last direction close")
+    data = peer.reply(0xD8, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 0, "the other valve has not moved")
+
+    # SIGUSR1 adds TJV123455: it takes 0xD8 and the others move up one address.
+    simulator.send_signal(signal.SIGUSR1)
+    valves, _ = peer.i_am_here(1.5)
+    check(valves.get(123455, (None,))[0] == 0xD8, "TJV123455 added at 0xD8: %s" % valves)
+    check(valves.get(123456, (None,))[0] == 0xD9, "TJV123456 moved to 0xD9")
+    check(valves.get(123457, (None,))[0] == 0xDA, "TJV123457 moved to 0xDA")
+    data = peer.reply(0xDA, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 450, "TJV123457 keeps its position at 0xDA")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,230 @@
+// valve-sim: a bank of simulated TeeJet CAN valves on a SocketCAN interface (or a virtual bus).
+
+#include <pthread.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <deque>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "teejet/can/open_bus.hpp"
+#include "teejet/codec/codec.hpp"
+#include "teejet/sim/setup.hpp"
+#include "teejet/sim/simulator.hpp"
+
+namespace {
+
+namespace sim = teejet::sim;
+namespace codec = teejet::codec;
+
+constexpr int kExitUsage = 2;
+constexpr int kExitBus = 1;
+
+constexpr const char* kDescription =
+    "Simulates a bank of TeeJet CAN valves, faithful to the TeeJet CAN Bus Valve Protocol "
+    "sheet, on a SocketCAN interface.";
+
+constexpr const char* kFooter = R"(Examples:
+  valve-sim --can vcan0 --valves 4                   TJV000001..TJV000004 at 0xD8..0xDB
+  valve-sim --can vcan0 --serials 123456,TJV123457 --opened 360 --dps 120 -v
+  valve-sim --can vcan0 --valves 2 --inject-error TJV000002:high-voltage:16.2:15.5
+
+Addresses: valves are ranked by serial, lowest first: the lowest takes 0xD8, the next 0xD9, ...
+Signals: SIGINT/SIGTERM stop cleanly (exit 0). SIGUSR1 adds a valve at run time (the next
+`hotplug:` entry of --config, else one serial below the lowest), which moves the valves above
+it up one address, as the protocol sheet warns.
+
+Exit status: 0 after SIGINT/SIGTERM, 1 when the bus cannot be opened, 2 on usage errors.
+See docs/valve-sim.md for the config file and every behaviour.)";
+
+int usage_error(const std::string& message) {
+  std::cerr << "valve-sim: " << message << "\nRun with --help for more information.\n";
+  return kExitUsage;
+}
+
+std::shared_ptr<spdlog::logger> make_logger() {
+  auto logger = spdlog::stderr_color_mt("valve-sim");
+  logger->set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%^%l%$] %v");
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+  return logger;
+}
+
+// Adds the next valve: a `hotplug:` entry while there are any, then an automatic serial.
+void add_valve(sim::Simulator& simulator, const sim::Setup& setup,
+               std::deque<sim::ValveConfig>& hotplug, spdlog::logger& logger) {
+  sim::ValveConfig config = setup.base;
+  std::vector<sim::InjectedError> errors = setup.base_errors;
+  if (!hotplug.empty()) {
+    config = hotplug.front();
+    hotplug.pop_front();
+    errors.clear();
+    for (const auto& [serial, error] : setup.hotplug_errors) {
+      if (serial == config.serial) errors.push_back(error);
+    }
+  } else {
+    const auto serial = sim::serial_for_added_valve(simulator.assignments());
+    if (!serial) {
+      logger.error("SIGUSR1: no valve added: the bank is full or no serial is free");
+      return;
+    }
+    config.serial = *serial;
+  }
+  if (const auto added = simulator.add_valve(config); !added) {
+    logger.error("SIGUSR1: no valve added: {}", added.reason());
+    return;
+  }
+  for (const auto& error : errors) {
+    if (const auto injected = simulator.inject_error(config.serial, error); !injected) {
+      logger.error("{}", injected.reason());
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{kDescription, "valve-sim"};
+  app.footer(kFooter);
+  app.set_version_flag("--version", "valve-sim " TEEJET_VERSION);
+
+  std::string can_spec;
+  unsigned valve_count = 0;
+  std::vector<std::string> serial_texts;
+  double dps = 0.0;
+  double closed = 0.0;
+  double opened = 0.0;
+  double start = 0.0;
+  std::string opening_direction;
+  std::string config_path;
+  std::vector<std::string> error_specs;
+  bool verbose = false;
+
+  app.add_option("--can", can_spec,
+                 "SocketCAN interface (can0, vcan0); \"virtual:NAME\" is an in-process bus, "
+                 "useful only when embedded")
+      ->required()
+      ->type_name("IFACE");
+  auto* valves_option =
+      app.add_option("--valves", valve_count, "simulate N valves, serials TJV000001..TJV00000N")
+          ->type_name("N");
+  auto* serials_option =
+      app.add_option("--serials", serial_texts,
+                     "simulate these valves: comma-separated serials, TJV123456 or 123456")
+          ->delimiter(',')
+          ->type_name("LIST");
+  valves_option->excludes(serials_option);
+  auto* dps_option = app.add_option("--dps", dps,
+                                    "degrees per second at 100 % speed, 0 < DPS <= 359 "
+                                    "(default 90)")
+                         ->type_name("DPS");
+  auto* closed_option =
+      app.add_option("--closed", closed, "Closed Degrees (default 0)")->type_name("DEG");
+  auto* opened_option =
+      app.add_option("--opened", opened,
+                     "Opened Degrees: at most 340 for a limited valve, 360 for a full-turn "
+                     "valve (default 90)")
+          ->type_name("DEG");
+  auto* start_option =
+      app.add_option("--start", start, "position at power-up (default: Closed Degrees)")
+          ->type_name("DEG");
+  auto* direction_option =
+      app.add_option("--opening-direction", opening_direction,
+                     "which way the valves turn to open, looking from the top (default "
+                     "clockwise)")
+          ->check(CLI::IsMember({"clockwise", "counterclockwise"}))
+          ->type_name("DIR");
+  app.add_option("--config", config_path,
+                 "YAML file: defaults, per-valve settings, errors to inject, valves to add on "
+                 "SIGUSR1 (see docs/valve-sim.md)")
+      ->type_name("FILE.yaml");
+  app.add_option("--inject-error", error_specs,
+                 "latch an error until Clear Errors, e.g. TJV000001:high-voltage:16.2:15.5; "
+                 "kinds high-voltage, low-voltage, high-current, low-current, "
+                 "high-temperature, min-dps (which takes :open or :close at the end); "
+                 "repeatable")
+      ->type_name("SERIAL:KIND:VALUE:LIMIT");
+  app.add_flag("-v,--verbose", verbose, "log every frame received and sent, decoded");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int code = app.exit(error);
+    return code == 0 ? 0 : kExitUsage;
+  }
+
+  sim::CommandLine command_line;
+  if (valves_option->count() > 0) command_line.valve_count = valve_count;
+  for (const auto& text : serial_texts) {
+    const auto serial = codec::parse_serial(text);
+    if (!serial) return usage_error("--serials: " + serial.error().reason);
+    command_line.serials.push_back(*serial);
+  }
+  if (serials_option->count() > 0 && command_line.serials.empty()) {
+    return usage_error("--serials: give at least one serial");
+  }
+  auto& settings = command_line.settings;
+  if (dps_option->count() > 0) settings.degrees_per_second = dps;
+  if (closed_option->count() > 0) settings.closed_degrees = closed;
+  if (opened_option->count() > 0) settings.opened_degrees = opened;
+  if (start_option->count() > 0) settings.start_degrees = start;
+  if (direction_option->count() > 0)
+    settings.opening_direction = sim::parse_rotation(opening_direction);
+  for (const auto& spec : error_specs) {
+    const auto parsed = sim::parse_error_spec(spec);
+    if (!parsed) return usage_error("--inject-error " + parsed.error().reason);
+    command_line.errors.push_back(*parsed);
+  }
+
+  sim::ConfigFile file;
+  if (!config_path.empty()) {
+    auto loaded = sim::load_config(config_path);
+    if (!loaded) return usage_error(loaded.error().reason);
+    file = std::move(loaded).value();
+  }
+  auto composed = sim::compose_setup(command_line, file);
+  if (!composed) return usage_error(composed.error().reason);
+  const sim::Setup setup = std::move(composed).value();
+
+  // Signals are taken synchronously by sigwait() below; the simulator thread inherits the mask.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGUSR1);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  const auto logger = make_logger();
+  sim::SimulatorOptions options;
+  options.valves = setup.valves;
+  options.errors = setup.errors;
+  options.verbose = verbose;
+  options.logger = logger;
+  sim::Simulator simulator(teejet::can::make_bus(can_spec, teejet::can::valve_side_filters()),
+                           std::move(options));
+  if (const auto started = simulator.start(); !started) {
+    std::cerr << "valve-sim: " << started.reason() << '\n';
+    return kExitBus;
+  }
+  logger->info("simulating {} valve(s) on {}; SIGUSR1 adds one, SIGINT/SIGTERM stop",
+               setup.valves.size(), can_spec);
+
+  std::deque<sim::ValveConfig> hotplug(setup.hotplug.begin(), setup.hotplug.end());
+  for (;;) {
+    int received = 0;
+    if (sigwait(&signals, &received) != 0) continue;
+    if (received == SIGUSR1) {
+      add_valve(simulator, setup, hotplug, *logger);
+      continue;
+    }
+    logger->info("{}: stopping", received == SIGINT ? "SIGINT" : "SIGTERM");
+    break;
+  }
+  simulator.stop();
+  logger->info("sent {} frames, handled {}", simulator.frames_sent(), simulator.frames_handled());
+  return 0;
+}
