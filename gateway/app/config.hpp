@@ -1,0 +1,42 @@
+#pragma once
+
+// Everything the gateway is told: command-line flags over a YAML file over defaults. The file
+// format is documented with examples in docs/gateway.md; config/gateway.example.yaml shows
+// every key with its default.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "teejet/bridge/bridge.hpp"
+#include "teejet/codec/result.hpp"
+
+namespace teejet::gateway {
+
+enum class OnCommanderLost { kStopItsValves, kIgnore };
+
+struct GatewayConfig {
+  std::string can = "";  // SocketCAN interface, "virtual:NAME", or "sim:N"
+  int domain = 0;
+  std::string profile_file;
+  bool stop_valves_on_exit = true;
+  OnCommanderLost on_commander_lost = OnCommanderLost::kStopItsValves;
+  // For --can sim:N: the embedded simulator's N valves, serials from sim_first_serial up.
+  std::uint32_t sim_first_serial = 1;
+  double sim_degrees_per_second = 90.0;
+  double sim_closed_degrees = 0.0;
+  double sim_opened_degrees = 90.0;
+  bridge::BridgeConfig bridge;
+};
+
+// Reads a YAML file over `base`. Unknown keys are errors, so a typo never silently does nothing.
+codec::Result<GatewayConfig> load_config_file(const std::string& path, GatewayConfig base);
+
+// Same, from text (for tests and error messages naming the source).
+codec::Result<GatewayConfig> parse_config(const std::string& yaml, const std::string& source,
+                                          GatewayConfig base);
+
+// How many simulated valves "sim:N" asks for, or nullopt if `can` is not of that form.
+codec::Result<std::optional<int>> simulated_valve_count(const std::string& can);
+
+}  // namespace teejet::gateway

@@ -1,0 +1,112 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "config.hpp"
+
+namespace teejet::gateway {
+namespace {
+
+using namespace std::chrono_literals;
+
+GatewayConfig parse(const std::string& yaml) {
+  auto config = parse_config(yaml, "test.yaml", GatewayConfig{});
+  EXPECT_TRUE(config) << (config ? "" : config.error().reason);
+  return config ? *config : GatewayConfig{};
+}
+
+std::string error_of(const std::string& yaml) {
+  auto config = parse_config(yaml, "test.yaml", GatewayConfig{});
+  EXPECT_FALSE(config);
+  return config ? "" : config.error().reason;
+}
+
+TEST(GatewayConfig, EmptyFileKeepsTheDefaults) {
+  const auto config = parse("");
+  EXPECT_EQ(config.bridge.offline_after, 3s);
+  EXPECT_TRUE(config.stop_valves_on_exit);
+  EXPECT_FALSE(config.bridge.allow_baud_change);
+  EXPECT_EQ(config.bridge.poll.size(), 9u);
+}
+
+TEST(GatewayConfig, TheShippedExampleParsesAndMatchesTheDefaults) {
+  std::ifstream file(EXAMPLE_CONFIG);
+  std::stringstream text;
+  text << file.rdbuf();
+  const auto config = parse(text.str());
+  const GatewayConfig defaults;
+  EXPECT_EQ(config.can, "can0");
+  EXPECT_EQ(config.bridge.offline_after, defaults.bridge.offline_after);
+  EXPECT_EQ(config.bridge.poll, bridge::default_poll_schedule());
+  EXPECT_EQ(config.bridge.reply_timeout, defaults.bridge.reply_timeout);
+  ASSERT_TRUE(config.bridge.default_limits);
+  EXPECT_EQ(config.bridge.default_limits->opened_degrees, 90.0);
+  EXPECT_TRUE(config.bridge.limits.at(3).full_turn());
+}
+
+TEST(GatewayConfig, EveryKeyIsRead) {
+  const auto config = parse(R"(
+gateway: {name: boom-left, can: vcan0, domain: 7, offline_after_s: 1.5, stop_valves_on_exit: false,
+          on_commander_lost: ignore, allow_baud_change: true}
+commands: {completion_tolerance_deg: 0.5, reply_timeout_s: 1, move_margin_s: 2, assumed_dps: 45}
+simulator: {first_serial: TJV000101, dps: 30, closed_deg: 10, opened_deg: 80}
+)");
+  EXPECT_EQ(config.bridge.gateway_name, "boom-left");
+  EXPECT_EQ(config.can, "vcan0");
+  EXPECT_EQ(config.domain, 7);
+  EXPECT_EQ(config.bridge.offline_after, 1500ms);
+  EXPECT_FALSE(config.stop_valves_on_exit);
+  EXPECT_EQ(config.on_commander_lost, OnCommanderLost::kIgnore);
+  EXPECT_TRUE(config.bridge.allow_baud_change);
+  EXPECT_EQ(config.bridge.completion_tolerance_degrees, 0.5);
+  EXPECT_EQ(config.bridge.reply_timeout, 1s);
+  EXPECT_EQ(config.bridge.move_margin, 2s);
+  EXPECT_EQ(config.bridge.assumed_dps, 45u);
+  EXPECT_EQ(config.sim_first_serial, 101u);
+  EXPECT_EQ(config.sim_degrees_per_second, 30.0);
+  EXPECT_EQ(config.sim_opened_degrees, 80.0);
+}
+
+TEST(GatewayConfig, PollEntriesChangeOnlyWhatTheyName) {
+  const auto config = parse("poll: {position: 5, run_time: off, version: off}");
+  const std::vector<codec::ToValveMessage> expected{
+      codec::RequestPosition{5},          codec::RequestTemperature{10},
+      codec::RequestVoltage{10},          codec::RequestCurrent{10},
+      codec::RequestDegreesPerSecond{10}, codec::RequestSpeedDirection{10},
+      codec::RequestCycleCounts{50}};
+  EXPECT_EQ(config.bridge.poll, expected);
+  EXPECT_EQ(parse("poll: {temperature: once}").bridge.poll.at(2),
+            codec::ToValveMessage{codec::RequestTemperature{0}});
+}
+
+TEST(GatewayConfig, MistakesAreNamedWithTheirLine) {
+  EXPECT_EQ(error_of("gateway:\n  nmae: x\n"), "test.yaml: line 2: unknown key 'nmae' in gateway");
+  EXPECT_EQ(error_of("polling: {}\n"), "test.yaml: line 1: unknown key 'polling' in the file");
+  EXPECT_EQ(error_of("poll:\n  position: 300\n"),
+            "test.yaml: line 2: poll.position is at most 255 tenths of a second");
+  EXPECT_EQ(error_of("gateway: {on_commander_lost: panic}"),
+            "test.yaml: line 1: gateway.on_commander_lost is 'stop' or 'ignore'");
+  EXPECT_EQ(error_of("gateway: {offline_after_s: 0}"),
+            "test.yaml: line 1: gateway.offline_after_s must be greater than 0");
+  EXPECT_EQ(error_of("valves: {TJV12x: {opened_deg: 90}}"),
+            "test.yaml: line 1: valves: serial 'TJV12x' is not TJV followed by digits, nor "
+            "digits alone");
+  EXPECT_EQ(error_of("valves: {default: {opened_deg: 350}}"),
+            "test.yaml: line 1: valves.default: need 0 <= closed_deg < opened_deg, opened_deg "
+            "<= 340 or = 360");
+  EXPECT_NE(error_of("gateway: [unclosed").find("test.yaml: "), std::string::npos);
+}
+
+TEST(GatewayConfig, SimulatedValveCount) {
+  EXPECT_EQ(*simulated_valve_count("can0"), std::nullopt);
+  EXPECT_EQ(*simulated_valve_count("sim:4"), 4);
+  EXPECT_EQ(*simulated_valve_count("sim:32"), 32);
+  EXPECT_EQ(simulated_valve_count("sim:33").error().reason,
+            "--can sim:33: sim:N takes 1 to 32 valves (one per address 0xD8..0xF7)");
+  EXPECT_FALSE(simulated_valve_count("sim:"));
+  EXPECT_FALSE(simulated_valve_count("sim:0"));
+  EXPECT_FALSE(simulated_valve_count("sim:4x"));
+}
+
+}  // namespace
+}  // namespace teejet::gateway
