@@ -96,9 +96,10 @@ void Gateway::stop() {
     const auto stopped = bridge_->stop_all(now());
     spdlog::info("stopped {} valve(s) on exit", stopped);
   }
-  // DDS goes first so that no command callback can reach a bridge being torn down.
-  commands_.reset();
+  // Deleting the participant deletes the command reader, after which no callback can reach
+  // the listener or the bridge; only then may they go.
   participant_.reset();
+  commands_.reset();
   bridge_.reset();
   publisher_.reset();
   if (bus_) bus_->close();
