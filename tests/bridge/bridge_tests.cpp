@@ -358,6 +358,33 @@ TEST_F(BridgeTest, RequestCompletesWhenTheReplyArrivesOrTimesOut) {
   EXPECT_EQ(sink.last_reason(), "no reply within 2000 ms");
 }
 
+TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
+  // The sheet: a request sets the resend period "until changed"; a one-shot request would
+  // silently stop the gateway's 100 ms position stream, so the gateway puts its schedule back.
+  Bridge bridge(config(), gateway_bus, sink);
+  announce(bridge, 0xD8, 1, kStart);
+  (void)sent();
+  auto once = command(1, 75, COMMAND_REQUEST);
+  once.telemetry(TELEMETRY_POSITION);
+  bridge.on_command(once, kStart);
+  EXPECT_EQ(sent().at(0).data[1], 0);  // the client's request, as asked
+  bridge.on_frame(from_valve(0xD8, codec::Position{12.0}, kStart + 10ms));
+  EXPECT_EQ(sink.states_of(75), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  const auto restored = sent();
+  ASSERT_EQ(restored.size(), 1u);
+  EXPECT_EQ(restored[0].data[0], 0x11);
+  EXPECT_EQ(restored[0].data[1], 1);  // the schedule's 100 ms again
+
+  auto slower = command(1, 76, COMMAND_REQUEST);
+  slower.telemetry(TELEMETRY_POSITION);
+  slower.resend_tenths(50);  // an explicit new period is the client's choice and stands
+  bridge.on_command(slower, kStart + 1s);
+  bridge.on_frame(from_valve(0xD8, codec::Position{12.0}, kStart + 1010ms));
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].data[1], 50);
+}
+
 TEST_F(BridgeTest, BaudRateChangeIsRefusedUnlessAllowed) {
   {
     Bridge bridge(config(), gateway_bus, sink);

@@ -139,7 +139,7 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
   const std::uint8_t id = codec::message_id(message);
   std::erase_if(valve.requests, [&](TrackedCommand& request) {
     if (request.awaited_reply != id) return false;
-    finish(request, COMMAND_COMPLETED, "", received);
+    end_request(serial, request, COMMAND_COMPLETED, "", received);
     return true;
   });
 
@@ -153,6 +153,35 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
 
 void Bridge::arm_polling(const directory::ValveRecord& valve) {
   for (const auto& request : config_.poll) (void)send(valve.address, request);
+}
+
+std::optional<codec::ToValveMessage> Bridge::schedule_entry_replaced_by(
+    const codec::ToValveMessage& request) const {
+  // Only a one-shot request disturbs the schedule by surprise; asking for another period is
+  // the client's explicit choice and stands until the valve reappears.
+  const bool one_shot = std::visit(
+      [](const auto& m) {
+        if constexpr (requires { m.resend_tenths; }) {
+          return m.resend_tenths == 0;
+        } else {
+          return false;
+        }
+      },
+      request);
+  if (!one_shot) return std::nullopt;
+  for (const auto& entry : config_.poll) {
+    if (codec::message_id(entry) == codec::message_id(request) && entry != request) return entry;
+  }
+  return std::nullopt;
+}
+
+void Bridge::end_request(std::uint32_t serial, const TrackedCommand& request, CommandState state,
+                         const std::string& reason, Timestamp now) {
+  finish(request, state, reason, now);
+  if (!request.restores) return;
+  if (const auto valve = directory_.find(serial); valve && valve->online) {
+    (void)send(valve->address, *request.restores);
+  }
 }
 
 void Bridge::publish_presence(const directory::ValveRecord& valve) {
@@ -211,6 +240,7 @@ void Bridge::track(std::uint32_t serial, const codec::ToValveMessage& message,
   if (!is_run_command(message)) {
     tracked.awaited_reply = reply_id(message);
     tracked.deadline = now + config_.reply_timeout;
+    tracked.restores = schedule_entry_replaced_by(message);
     valve.requests.push_back(std::move(tracked));
     return;
   }
@@ -373,13 +403,13 @@ void Bridge::tick(Timestamp now) {
     }
     std::erase_if(valve.requests, [&](TrackedCommand& request) {
       if (now < *request.deadline) return false;
-      finish(request, COMMAND_TIMED_OUT,
-             "no reply within " +
-                 std::to_string(
-                     std::chrono::duration_cast<std::chrono::milliseconds>(config_.reply_timeout)
-                         .count()) +
-                 " ms",
-             now);
+      end_request(serial, request, COMMAND_TIMED_OUT,
+                  "no reply within " +
+                      std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                         config_.reply_timeout)
+                                         .count()) +
+                      " ms",
+                  now);
       return true;
     });
   }

@@ -96,6 +96,9 @@ class Bridge {
     std::optional<double> target_degrees;       // moves: where the valve should end up
     std::optional<std::uint8_t> awaited_reply;  // requests: the message id that answers
     bool done_at_deadline = false;              // Milliseconds to Run: complete when its time is up
+    // A one-shot request replaces the valve's automatic resend of that value (the sheet: "until
+    // changed"); this is the poll request that puts the gateway's schedule back afterwards.
+    std::optional<codec::ToValveMessage> restores;
   };
   struct ValveState {
     std::optional<double> position;
@@ -110,6 +113,10 @@ class Bridge {
   void handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                         Timestamp received);
   void arm_polling(const directory::ValveRecord& valve);
+  std::optional<codec::ToValveMessage> schedule_entry_replaced_by(
+      const codec::ToValveMessage& request) const;
+  void end_request(std::uint32_t serial, const TrackedCommand& request, CommandState state,
+                   const std::string& reason, Timestamp now);
   void publish_presence(const directory::ValveRecord& valve);
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp now);
