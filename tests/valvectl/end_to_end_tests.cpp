@@ -1,0 +1,341 @@
+// The real valvectl binary against a gateway made of the project's bridge, DDS endpoints and
+// valve simulator, all inside a private network namespace (tests/netns/isolated). Every valve
+// has one job so that the tests do not disturb each other; they share one gateway because its
+// discovery is the slow part.
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "exit_codes.hpp"
+#include "fake_gateway.hpp"
+#include "subprocess.hpp"
+#include "teejet/codec/codec.hpp"
+
+namespace teejet::testing {
+namespace {
+
+using namespace std::chrono_literals;
+using namespace teejet::valvectl;
+
+// Valves by role.
+constexpr std::uint32_t kListed = 1;
+constexpr std::uint32_t kMoved = 2;
+constexpr std::uint32_t kMovedWithJson = 3;
+constexpr std::uint32_t kSuperseded = 4;
+constexpr std::uint32_t kMovedWithoutWait = 5;
+constexpr std::uint32_t kQueried = 6;
+constexpr std::uint32_t kJogged = 7;
+constexpr std::uint32_t kFaulty = 8;
+constexpr std::uint32_t kValveCount = 8;
+constexpr std::uint32_t kSilent = 999;  // announced once, then offline
+constexpr std::uint8_t kSilentAddress = 0xF0;
+
+int test_domain() {
+  // Shared memory is not namespaced: a domain of its own keeps parallel test runs apart. 200..231
+  // stays clear of the ranges tests/dds (40..139) and tests/gateway (100..199) pick from; the
+  // next domain up is the empty one of NoGatewayOnTheDomainExits2.
+  return 200 + 2 * static_cast<int>(::getpid() % 16);
+}
+
+std::string domain_text() { return std::to_string(test_domain()); }
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream stream(text);
+  for (std::string line; std::getline(stream, line);) {
+    if (!line.empty()) lines.push_back(line);
+  }
+  return lines;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+std::string describe(const Finished& finished) {
+  return "exit " + std::to_string(finished.exit_code) + " after " +
+         std::to_string(finished.took.count()) + " ms\n--- stdout\n" + finished.out +
+         "--- stderr\n" + finished.err;
+}
+
+class ValvectlEndToEnd : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    FakeGatewayOptions options{.domain = test_domain()};
+    for (std::uint32_t serial = 1; serial <= kValveCount; ++serial) {
+      sim::ValveConfig valve;
+      valve.serial = serial;  // dps 90, closed 0, opened 90, 12.0 V, 25 °C
+      options.valves.push_back(valve);
+    }
+    gateway_ = std::make_unique<FakeGateway>(options);
+    gateway_->announce_silent_valve(kSilent, kSilentAddress);
+  }
+  static void TearDownTestSuite() { gateway_.reset(); }
+
+  // valvectl with --domain, then `args`.
+  static Finished valvectl(std::vector<std::string> args, std::chrono::milliseconds limit = 30s) {
+    args.insert(args.begin(), {VALVECTL_PATH, "--domain", domain_text()});
+    return run(args, limit);
+  }
+
+  static std::size_t commands_for(std::uint32_t serial) {
+    std::size_t count = 0;
+    for (const auto& command : gateway_->commands()) count += command.serial() == serial;
+    return count;
+  }
+
+  static bool silent_valve_offline() {
+    for (const auto& valve : gateway_->bridge().valves()) {
+      if (valve.serial == kSilent) return !valve.online;
+    }
+    return false;
+  }
+
+  static std::unique_ptr<FakeGateway> gateway_;
+};
+
+std::unique_ptr<FakeGateway> ValvectlEndToEnd::gateway_;
+
+TEST_F(ValvectlEndToEnd, ListShowsEveryValveWithItsTelemetry) {
+  const auto listed =
+      valvectl({"--profile", LOOPBACK_PROFILE, "list", "--wait-for", std::to_string(kValveCount)});
+  ASSERT_EQ(listed.exit_code, kExitOk) << describe(listed);
+  const auto lines = split_lines(listed.out);
+  ASSERT_GE(lines.size(), kValveCount + 1) << describe(listed);
+  EXPECT_EQ(lines[0].rfind("SERIAL", 0), 0u);
+  for (std::uint32_t serial = 1; serial <= kValveCount; ++serial) {
+    EXPECT_TRUE(contains(listed.out, codec::format_serial(serial))) << describe(listed);
+  }
+  // TJV000001 at 0xD8, online, at 0.0 degrees, 25 °C, 12.0 V, no errors, on our gateway.
+  EXPECT_TRUE(contains(lines[1], "TJV000001  0xD8  yes")) << lines[1];
+  EXPECT_TRUE(contains(lines[1], "0.0      25   12.0  -")) << lines[1];
+  EXPECT_TRUE(contains(lines[1], gateway_->name())) << lines[1];
+}
+
+TEST_F(ValvectlEndToEnd, ListAsJsonIsAnArrayOfValveObjects) {
+  const auto listed = valvectl({"list", "--json", "--wait-for", std::to_string(kValveCount)});
+  ASSERT_EQ(listed.exit_code, kExitOk) << describe(listed);
+  const auto json = nlohmann::json::parse(listed.out);
+  ASSERT_TRUE(json.is_array());
+  ASSERT_GE(json.size(), kValveCount);
+  const auto& first = json[0];
+  EXPECT_EQ(first["serial"], codec::format_serial(kListed));
+  EXPECT_EQ(first["address"], 0xD8);
+  EXPECT_EQ(first["online"], true);
+  EXPECT_DOUBLE_EQ(first["position"].get<double>(), 0.0);
+  EXPECT_EQ(first["temperature_c"], 25);
+  EXPECT_DOUBLE_EQ(first["volts"].get<double>(), 12.0);
+  EXPECT_EQ(first["errors"], nlohmann::json::array());
+  EXPECT_EQ(first["gateway"], gateway_->name());
+}
+
+TEST_F(ValvectlEndToEnd, MoveWithWaitShowsProgressAndExitsZeroOnCompletion) {
+  const auto moved = valvectl({"move", "TJV000002", "--to", "45", "--wait"});
+  ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  const auto lines = split_lines(moved.out);
+  ASSERT_GE(lines.size(), 3u) << describe(moved);
+  EXPECT_TRUE(contains(lines.front(), "TJV000002 target_degrees #")) << lines.front();
+  EXPECT_TRUE(contains(lines.front(), ": ACCEPTED")) << lines.front();
+  EXPECT_TRUE(contains(lines.back(), ": COMPLETED")) << lines.back();
+  EXPECT_TRUE(contains(moved.out, "TJV000002 position ")) << describe(moved);
+  EXPECT_NEAR(gateway_->position_of(kMoved), 45.0, 1.0);
+}
+
+TEST_F(ValvectlEndToEnd, MoveAsJsonPrintsOneParsableObjectPerLine) {
+  const auto moved = valvectl({"--json", "move", "3", "--to", "30", "--wait"});
+  ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  std::vector<nlohmann::json> statuses;
+  for (const auto& line : split_lines(moved.out)) {
+    const auto json = nlohmann::json::parse(line);
+    if (json["event"] == "status") statuses.push_back(json);
+  }
+  ASSERT_GE(statuses.size(), 2u) << describe(moved);
+  EXPECT_EQ(statuses.front()["state"], "accepted");
+  EXPECT_EQ(statuses.back()["state"], "completed");
+  EXPECT_EQ(statuses.front()["command_id"], statuses.back()["command_id"]);
+  EXPECT_EQ(statuses.front()["serial"], codec::format_serial(kMovedWithJson));
+  EXPECT_EQ(statuses.front()["kind"], "target_degrees");
+  EXPECT_EQ(statuses.front()["origin"].get<std::string>().rfind("valvectl@", 0), 0u);
+}
+
+TEST_F(ValvectlEndToEnd, InvalidArgumentsExit64BeforeAnythingIsSent) {
+  const auto before = gateway_->commands().size();
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"move", "1", "--to", "400"},
+           {"move", "1", "--to", "10", "--speed", "101"},
+           {"move", "TJV12x", "--to", "10"},
+           {"manual", "1", "--speed", "50", "--direction", "shortest"}}) {
+    const auto refused = valvectl(args);
+    EXPECT_EQ(refused.exit_code, kExitUsage) << describe(refused);
+    EXPECT_TRUE(contains(refused.err, "valvectl: ")) << describe(refused);
+    EXPECT_TRUE(refused.out.empty()) << describe(refused);
+  }
+  // A valid command sent now reaches the gateway before anything sent earlier could be missed.
+  const auto stopped = valvectl({"stop", "1"});
+  ASSERT_EQ(stopped.exit_code, kExitOk) << describe(stopped);
+  ASSERT_TRUE(eventually([&] { return gateway_->commands().size() > before; }, 5s));
+  const auto commands = gateway_->commands();
+  ASSERT_EQ(commands.size(), before + 1);
+  EXPECT_EQ(commands.back().kind(), COMMAND_STOP);
+}
+
+TEST_F(ValvectlEndToEnd, UnknownSerialExits2WithoutWaitingTheWholeTimeout) {
+  const auto unknown = valvectl({"--timeout", "10", "move", "123", "--to", "10"});
+  EXPECT_EQ(unknown.exit_code, kExitNotFound) << describe(unknown);
+  EXPECT_TRUE(contains(unknown.err,
+                       "valve TJV000123 is not known to any gateway on domain " + domain_text()))
+      << describe(unknown);
+  // Every gateway had told all it knows: no need to wait for the timeout.
+  EXPECT_LT(unknown.took, 9s) << describe(unknown);
+  EXPECT_EQ(commands_for(123), 0u);
+}
+
+TEST_F(ValvectlEndToEnd, NoGatewayOnTheDomainExits2) {
+  const std::string empty_domain = std::to_string(test_domain() + 1);
+  const auto listed = run({VALVECTL_PATH, "--domain", empty_domain, "--timeout", "1", "list"});
+  EXPECT_EQ(listed.exit_code, kExitNotFound) << describe(listed);
+  EXPECT_TRUE(contains(listed.err, "no gateway found on domain " + empty_domain));
+  const auto moved =
+      run({VALVECTL_PATH, "--domain", empty_domain, "--timeout", "1", "move", "1", "--to", "5"});
+  EXPECT_EQ(moved.exit_code, kExitNotFound) << describe(moved);
+  EXPECT_TRUE(contains(moved.err, "no gateway found on domain " + empty_domain));
+}
+
+TEST_F(ValvectlEndToEnd, CommandToAnOfflineValveIsRejectedWithTheReason) {
+  ASSERT_TRUE(eventually([] { return silent_valve_offline(); }, 15s));
+  const auto rejected = valvectl({"move", "TJV000999", "--to", "10", "--wait"});
+  EXPECT_EQ(rejected.exit_code, kExitRejected) << describe(rejected);
+  EXPECT_TRUE(contains(rejected.out, "TJV000999 target_degrees #"));
+  EXPECT_TRUE(contains(rejected.out, ": REJECTED: valve TJV000999 is offline"))
+      << describe(rejected);
+}
+
+TEST_F(ValvectlEndToEnd, SettingTheBaudRateWithoutPermissionIsRejected) {
+  const auto rejected = valvectl({"--json", "baud", "6", "--set", "500000"});
+  EXPECT_EQ(rejected.exit_code, kExitRejected) << describe(rejected);
+  const auto status = nlohmann::json::parse(split_lines(rejected.out).at(0));
+  EXPECT_EQ(status["state"], "rejected");
+  EXPECT_EQ(status["kind"], "set_baud_rate");
+  EXPECT_TRUE(contains(status["reason"].get<std::string>(), "not allowed"));
+}
+
+TEST_F(ValvectlEndToEnd, ANewerCommandSupersedesAWaitingMove) {
+  const auto before = commands_for(kSuperseded);
+  Subprocess slow_move({VALVECTL_PATH, "--domain", domain_text(), "move", "4", "--to", "80",
+                        "--speed", "10", "--wait"});
+  // Once the gateway has handled the slow move, the next command replaces it.
+  ASSERT_TRUE(eventually([&] { return commands_for(kSuperseded) > before; }, 15s));
+  const auto newer = valvectl({"move", "4", "--to", "0", "--direction", "close"});
+  EXPECT_EQ(newer.exit_code, kExitOk) << describe(newer);
+  const auto replaced = slow_move.wait(30s);
+  EXPECT_EQ(replaced.exit_code, kExitSuperseded) << describe(replaced);
+  EXPECT_TRUE(contains(split_lines(replaced.out).back(), ": SUPERSEDED: replaced by command"))
+      << describe(replaced);
+}
+
+TEST_F(ValvectlEndToEnd, AMoveGoesOnAfterValvectlExitsWithoutWait) {
+  const auto moved = valvectl({"move", "5", "--to", "60"});
+  ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  const auto lines = split_lines(moved.out);
+  ASSERT_EQ(lines.size(), 1u) << describe(moved);
+  EXPECT_TRUE(contains(lines[0], ": ACCEPTED"));
+  // valvectl's writer went away in good order: that is no reason for the fail-safe to stop it.
+  EXPECT_TRUE(eventually([] { return gateway_->position_of(kMovedWithoutWait) >= 59.0; }, 10s))
+      << "position " << gateway_->position_of(kMovedWithoutWait);
+}
+
+TEST_F(ValvectlEndToEnd, RequestWithWaitPrintsTheReply) {
+  const auto requested = valvectl({"request", "TJV000006", "voltage", "--wait"});
+  ASSERT_EQ(requested.exit_code, kExitOk) << describe(requested);
+  EXPECT_TRUE(contains(requested.out, "TJV000006 request #")) << describe(requested);
+  EXPECT_TRUE(contains(requested.out, ": COMPLETED")) << describe(requested);
+  EXPECT_TRUE(contains(requested.out, "TJV000006 voltage volts=12.0")) << describe(requested);
+
+  const auto baud = valvectl({"--json", "baud", "6", "--request", "--wait"});
+  ASSERT_EQ(baud.exit_code, kExitOk) << describe(baud);
+  const auto reply = nlohmann::json::parse(split_lines(baud.out).back());
+  EXPECT_EQ(reply["event"], "reply");
+  EXPECT_EQ(reply["values"]["bit_rate"], 250000);
+}
+
+TEST_F(ValvectlEndToEnd, JogWithWaitCompletesWhenTheTimeIsUp) {
+  const auto jogged = valvectl({"jog", "7", "--ms", "300", "--speed", "50", "--wait"});
+  ASSERT_EQ(jogged.exit_code, kExitOk) << describe(jogged);
+  EXPECT_TRUE(contains(split_lines(jogged.out).back(), "milliseconds_to_run")) << jogged.out;
+  EXPECT_TRUE(contains(split_lines(jogged.out).back(), ": COMPLETED")) << jogged.out;
+  EXPECT_GT(gateway_->position_of(kJogged), 5.0);  // 45 deg/s for 0.3 s
+}
+
+TEST_F(ValvectlEndToEnd, LatchedErrorsShowInTheListUntilCleared) {
+  ASSERT_TRUE(gateway_->simulator().inject_error(
+      kFaulty, {.kind = sim::ErrorKind::kHighVoltage, .value = 16.2, .limit = 15.5}));
+  const auto error_listed = [](const std::string& expected) {
+    return eventually(
+        [&] {
+          const auto listed = valvectl({"--json", "list"});
+          if (listed.exit_code != kExitOk) return false;
+          for (const auto& valve : nlohmann::json::parse(listed.out)) {
+            if (valve["serial"] == codec::format_serial(kFaulty)) {
+              return valve["errors"].dump() == expected;
+            }
+          }
+          return false;
+        },
+        20s);
+  };
+  ASSERT_TRUE(error_listed(R"(["high_voltage"])"));
+  const auto cleared = valvectl({"clear-errors", "8", "--wait"});
+  ASSERT_EQ(cleared.exit_code, kExitOk) << describe(cleared);
+  EXPECT_TRUE(contains(cleared.out, "TJV000008 clear_errors #")) << cleared.out;
+  EXPECT_TRUE(error_listed("[]"));
+}
+
+TEST_F(ValvectlEndToEnd, StopAllStopsEveryOnlineValve) {
+  ASSERT_TRUE(eventually([] { return silent_valve_offline(); }, 15s));
+  const auto stopped = valvectl({"stop", "--all", "--wait"});
+  ASSERT_EQ(stopped.exit_code, kExitOk) << describe(stopped);
+  std::size_t completed = 0;
+  for (const auto& line : split_lines(stopped.out)) completed += contains(line, ": COMPLETED");
+  EXPECT_EQ(completed, kValveCount) << describe(stopped);
+  EXPECT_FALSE(contains(stopped.out, "TJV000999"));  // offline: not commanded
+}
+
+TEST_F(ValvectlEndToEnd, WatchAsJsonPrintsOneArrayPerRefreshAndEndsWithExitZeroOnCtrlC) {
+  Subprocess watching(
+      {VALVECTL_PATH, "--domain", domain_text(), "--json", "watch", "--interval", "100"});
+  // Refreshes go on while the gateway is being discovered; wait for one that shows the valves.
+  ASSERT_TRUE(watching.wait_for_output(codec::format_serial(kValveCount), 15s));
+  watching.signal(SIGINT);
+  const auto watched = watching.wait(15s);
+  EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
+  const auto lines = split_lines(watched.out);
+  ASSERT_FALSE(lines.empty());
+  for (const auto& line : lines) EXPECT_TRUE(nlohmann::json::parse(line).is_array()) << line;
+  EXPECT_GE(nlohmann::json::parse(lines.back()).size(), kValveCount);
+}
+
+TEST_F(ValvectlEndToEnd, WatchAsTextPrintsATablePerRefreshWithoutScreenControlIntoAPipe) {
+  Subprocess watching({VALVECTL_PATH, "--domain", domain_text(), "watch", "--interval", "100"});
+  ASSERT_TRUE(watching.wait_for_output(codec::format_serial(kValveCount), 15s));
+  watching.signal(SIGINT);
+  const auto watched = watching.wait(15s);
+  EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
+  EXPECT_TRUE(contains(watched.out, "valvectl watch: domain " + domain_text()));
+  EXPECT_TRUE(contains(watched.out, "gateway " + gateway_->name() + " on valvectl-e2e-"));
+  EXPECT_TRUE(contains(watched.out, "SERIAL     ADDR  ONLINE"));
+  EXPECT_FALSE(contains(watched.out, "\x1b["));
+}
+
+TEST_F(ValvectlEndToEnd, WatchEndsByItselfAfterItsDuration) {
+  const auto watched = valvectl({"--json", "watch", "--interval", "100", "--duration", "0.5"});
+  EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
+  EXPECT_FALSE(split_lines(watched.out).empty()) << describe(watched);
+}
+
+}  // namespace
+}  // namespace teejet::testing

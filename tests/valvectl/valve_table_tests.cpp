@@ -1,0 +1,117 @@
+// The latest-state model behind list, watch and the command flows.
+
+#include <gtest/gtest.h>
+
+#include "names.hpp"
+#include "valve_table.hpp"
+
+namespace teejet::valvectl {
+namespace {
+
+ValvePresence presence(std::uint32_t serial, bool online, const std::string& gateway = "gw") {
+  ValvePresence p;
+  p.serial(serial);
+  p.address(static_cast<std::uint8_t>(0xD8 + serial));
+  p.online(online);
+  p.gateway(gateway);
+  return p;
+}
+
+GatewayStatus gateway_status(const std::string& name, std::uint32_t known) {
+  GatewayStatus s;
+  s.gateway(name);
+  s.valves_known(known);
+  s.valves_online(known);
+  return s;
+}
+
+TEST(ValvectlTable, TelemetryBeforePresenceStaysHiddenUntilThePresenceArrives) {
+  ValveTable table;
+  table.on_position(1, 12.3, 10);
+  EXPECT_TRUE(table.rows().empty());
+  EXPECT_FALSE(table.row(1));
+  table.on_presence(presence(1, true));
+  ASSERT_TRUE(table.row(1));
+  EXPECT_EQ(table.row(1)->position_degrees, 12.3);
+  EXPECT_EQ(table.row(1)->address, 0xD9);
+  EXPECT_EQ(table.row(1)->gateway, "gw");
+}
+
+TEST(ValvectlTable, RowsAreSortedBySerialAndCountOnline) {
+  ValveTable table;
+  table.on_presence(presence(3, true));
+  table.on_presence(presence(1, false));
+  table.on_presence(presence(2, true));
+  const auto rows = table.rows();
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0].serial, 1u);
+  EXPECT_EQ(rows[2].serial, 3u);
+  EXPECT_EQ(table.online_count(), 2u);
+}
+
+TEST(ValvectlTable, DirectoryIsCompleteWhenEveryMatchedGatewayHasToldAllItKnows) {
+  ValveTable table;
+  EXPECT_FALSE(table.directory_complete());  // nobody found yet
+  table.set_gateways_matched(1);
+  table.on_gateway_status(gateway_status("a", 2));
+  EXPECT_FALSE(table.directory_complete());
+  table.on_presence(presence(1, true, "a"));
+  EXPECT_FALSE(table.directory_complete());
+  table.on_presence(presence(2, false, "a"));
+  EXPECT_TRUE(table.directory_complete());
+  table.set_gateways_matched(2);  // a second gateway has been found but not reported yet
+  EXPECT_FALSE(table.directory_complete());
+  table.on_gateway_status(gateway_status("b", 0));
+  EXPECT_TRUE(table.directory_complete());
+}
+
+TEST(ValvectlTable, ErrorsLatchUntilCleared) {
+  ValveTable table;
+  table.on_presence(presence(1, true));
+  table.on_error(1, ERROR_HIGH_VOLTAGE);
+  table.on_error(1, ERROR_LOW_CURRENT);
+  EXPECT_EQ(table.row(1)->errors.size(), 2u);
+  table.on_error_cleared(1, ERROR_HIGH_VOLTAGE);
+  EXPECT_EQ(table.row(1)->errors, std::set<ErrorKind>{ERROR_LOW_CURRENT});
+}
+
+TEST(ValvectlTable, TelemetryIsCompleteWhenEveryOnlineValveReportedItsValues) {
+  ValveTable table;
+  table.on_presence(presence(1, true));
+  table.on_presence(presence(2, false));  // offline valves are not waited for
+  EXPECT_FALSE(table.telemetry_complete());
+  table.on_position(1, 1.0, 1);
+  table.on_temperature(1, 25, 24, 1);
+  EXPECT_FALSE(table.telemetry_complete());
+  table.on_voltage(1, 12.0, 1);
+  EXPECT_TRUE(table.telemetry_complete());
+}
+
+TEST(ValvectlTable, RepliesKeepTheLatestOfEachKind) {
+  ValveTable table;
+  table.on_voltage(4, 12.0, 100);
+  table.on_reply(4, kBaudRateReply, {200, {{"bit_rate", 250000}}});
+  ASSERT_TRUE(table.reply(4, "voltage"));
+  EXPECT_EQ(table.reply(4, "voltage")->received_ns, 100u);
+  EXPECT_EQ(table.reply(4, "voltage")->values["volts"], 12.0);
+  EXPECT_EQ(table.reply(4, "baud_rate")->values["bit_rate"], 250000);
+  EXPECT_FALSE(table.reply(4, "current"));
+  EXPECT_EQ(reply_name(TELEMETRY_CYCLE_COUNTS), "cycle_count");
+}
+
+TEST(ValvectlNames, TelemetryWordsRoundTrip) {
+  for (const Telemetry telemetry :
+       {TELEMETRY_VERSION, TELEMETRY_POSITION, TELEMETRY_TEMPERATURE, TELEMETRY_VOLTAGE,
+        TELEMETRY_CURRENT, TELEMETRY_DEGREES_PER_SECOND, TELEMETRY_SPEED_DIRECTION,
+        TELEMETRY_RUN_TIME, TELEMETRY_CYCLE_COUNTS}) {
+    EXPECT_EQ(parse_telemetry(telemetry_word(telemetry)), telemetry);
+  }
+  EXPECT_FALSE(parse_telemetry("Voltage"));
+  EXPECT_EQ(parse_direction("shortest", true), DIRECTION_SHORTEST);
+  EXPECT_FALSE(parse_direction("shortest", false));
+  EXPECT_EQ(to_string(ERROR_MIN_DEGREES_PER_SECOND), "min_degrees_per_second");
+  EXPECT_EQ(to_string(BUS_OFF), "bus_off");
+}
+
+}  // namespace
+}  // namespace teejet::valvectl

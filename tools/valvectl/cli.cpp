@@ -1,0 +1,337 @@
+#include "cli.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <sstream>
+
+#include "exit_codes.hpp"
+#include "names.hpp"
+#include "teejet/codec/codec.hpp"
+
+namespace teejet::valvectl {
+namespace {
+
+constexpr const char* kDescription =
+    "Lists, watches and commands TeeJet CAN valves through teejet-gateway over DDS.";
+
+constexpr const char* kFooter = R"(A SERIAL is TJV123456 or 123456.
+
+Exit status: 0 done; 2 no gateway, or no gateway knows the valve; 3 the gateway rejected the
+command; 4 the command timed out, or no status arrived in time; 5 a newer command superseded it;
+64 invalid arguments (nothing was sent); 1 anything else (DDS could not be set up, ...).
+See docs/valvectl.md.)";
+
+constexpr double kMaxDegrees = 359.9;
+constexpr int kMaxSpeedPercent = 100;
+constexpr long long kMaxMilliseconds = 65535;
+constexpr int kMaxResendTenths = 255;
+
+// Everything any subcommand can take, as typed; checked and converted by build_invocation().
+struct RawArguments {
+  std::string serial;
+  std::string what;
+  double degrees = 0.0;
+  int speed = kMaxSpeedPercent;
+  std::string direction = "open";
+  long long milliseconds = 0;
+  int every_tenths = 0;
+  long long bit_rate = 0;
+  bool all = false;
+  bool baud_request = false;
+  bool wait = false;
+  double wait_timeout_seconds = 60.0;
+  double timeout_seconds = 5.0;
+  int interval_ms = 1000;
+  double duration_seconds = 0.0;
+};
+
+// The subcommands and their options, kept so build_invocation() can ask which were given.
+struct Parser {
+  CLI::App app{kDescription, "valvectl"};
+  RawArguments raw;
+  Invocation invocation;
+  CLI::App* list = nullptr;
+  CLI::App* watch = nullptr;
+  CLI::App* move = nullptr;
+  CLI::App* stop = nullptr;
+  CLI::App* manual = nullptr;
+  CLI::App* jog = nullptr;
+  CLI::App* clear_errors = nullptr;
+  CLI::App* request = nullptr;
+  CLI::App* baud = nullptr;
+  CLI::Option* duration = nullptr;
+  CLI::Option* wait_timeout = nullptr;  // of the subcommand that was used; see add_wait()
+  CLI::Option* bit_rate = nullptr;
+};
+
+[[noreturn]] void usage_error(const std::string& message) { throw CLI::ValidationError(message); }
+
+std::chrono::milliseconds seconds_option(const char* option, double seconds) {
+  if (!std::isfinite(seconds) || seconds <= 0.0) {
+    usage_error(std::string(option) + " must be a positive number of seconds");
+  }
+  return std::chrono::milliseconds(static_cast<long long>(std::llround(seconds * 1000.0)));
+}
+
+void add_serial(CLI::App* subcommand, RawArguments& raw, bool required = true) {
+  subcommand->add_option("SERIAL", raw.serial, "the valve, TJV123456 or 123456")
+      ->required(required);
+}
+
+void add_wait(Parser& parser, CLI::App* subcommand, const char* what) {
+  subcommand->add_flag("--wait", parser.raw.wait, what);
+  subcommand
+      ->add_option("--wait-timeout", parser.raw.wait_timeout_seconds,
+                   "with --wait: give up after this many seconds without a final status")
+      ->capture_default_str();
+}
+
+void add_drive(CLI::App* subcommand, RawArguments& raw, bool required, bool shortest) {
+  auto* speed = subcommand->add_option("--speed", raw.speed, "drive speed in percent, 0 to 100");
+  auto* direction = subcommand->add_option("--direction", raw.direction,
+                                           shortest ? "open, close or shortest" : "open or close");
+  if (required) {
+    speed->required();
+    direction->required();
+  } else {
+    speed->capture_default_str();
+    direction->capture_default_str();
+  }
+}
+
+void define(Parser& parser) {
+  CLI::App& app = parser.app;
+  RawArguments& raw = parser.raw;
+  GlobalOptions& global = parser.invocation.global;
+  app.footer(kFooter);
+  app.set_version_flag("--version", "valvectl " TEEJET_VERSION);
+  app.require_subcommand(1);
+  app.failure_message([](const CLI::App*, const CLI::Error& error) {
+    return "valvectl: " + std::string(error.what()) +
+           "\nRun valvectl --help for more information.\n";
+  });
+  // Global options may follow the subcommand too: `valvectl list --json`.
+  app.fallthrough();
+  app.add_option("--domain", global.domain, "DDS domain of the gateway")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 232));
+  app.add_option("--profile", global.profile_file, "Fast DDS XML profiles file, as the gateway's")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--json", global.json, "machine-readable output: JSON objects and arrays");
+  app.add_option("--timeout", raw.timeout_seconds,
+                 "seconds to look for gateways and valves, and to wait for the first status")
+      ->capture_default_str();
+
+  parser.list = app.add_subcommand("list", "a table of every valve the gateways know");
+  parser.list
+      ->add_option("--wait-for", parser.invocation.list.wait_for_online,
+                   "wait (up to --timeout) until at least N valves are online")
+      ->type_name("N");
+
+  parser.watch = app.add_subcommand("watch", "the table, refreshed until Ctrl-C");
+  parser.watch->add_option("--interval", raw.interval_ms, "refresh period in milliseconds")
+      ->capture_default_str()
+      ->check(CLI::Range(50, 3'600'000));
+  parser.duration = parser.watch->add_option("--duration", raw.duration_seconds,
+                                             "stop after this many seconds (default: Ctrl-C)");
+
+  parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
+  add_serial(parser.move, raw);
+  parser.move->add_option("--to", raw.degrees, "target position in degrees, 0 to 359.9")
+      ->required();
+  add_drive(parser.move, raw, /*required=*/false, /*shortest=*/true);
+  add_wait(parser, parser.move, "show the position until the move completes");
+
+  parser.stop = app.add_subcommand("stop", "stop a valve, or every online valve with --all");
+  add_serial(parser.stop, raw, /*required=*/false);
+  parser.stop->add_flag("--all", raw.all, "every online valve of every gateway");
+  add_wait(parser, parser.stop, "wait until each stop is completed");
+
+  parser.manual =
+      app.add_subcommand("manual", "drive a valve until told otherwise (stays ACCEPTED)");
+  add_serial(parser.manual, raw);
+  add_drive(parser.manual, raw, /*required=*/true, /*shortest=*/false);
+
+  parser.jog = app.add_subcommand("jog", "drive a valve for a time (Milliseconds to Run)");
+  add_serial(parser.jog, raw);
+  parser.jog->add_option("--ms", raw.milliseconds, "run time in milliseconds, 0 to 65535")
+      ->required();
+  add_drive(parser.jog, raw, /*required=*/false, /*shortest=*/false);
+  add_wait(parser, parser.jog, "wait until the run time is over");
+
+  parser.clear_errors = app.add_subcommand("clear-errors", "clear a valve's latched errors");
+  add_serial(parser.clear_errors, raw);
+  add_wait(parser, parser.clear_errors, "wait until the clear is completed");
+
+  parser.request = app.add_subcommand("request", "ask a valve to send a value");
+  add_serial(parser.request, raw);
+  parser.request
+      ->add_option("WHAT", raw.what,
+                   "version position temperature voltage current dps speed run-time "
+                   "cycle-counts")
+      ->required();
+  parser.request
+      ->add_option("--every", raw.every_tenths,
+                   "resend automatically every TENTHS of a second, 1 to 255; 0 = once")
+      ->type_name("TENTHS")
+      ->capture_default_str();
+  add_wait(parser, parser.request, "wait for the reply and print it");
+
+  parser.baud = app.add_subcommand("baud", "request or set a valve's CAN bit rate");
+  add_serial(parser.baud, raw);
+  parser.baud->add_flag("--request", raw.baud_request, "ask the valve for its bit rate");
+  parser.bit_rate = parser.baud->add_option(
+      "--set", raw.bit_rate, "set the bit rate, 250000 or 500000 (the gateway must allow it)");
+  add_wait(parser, parser.baud, "wait for the valve's reply (--request) and print it");
+}
+
+std::uint32_t checked_serial(const std::string& text) {
+  const auto serial = codec::parse_serial(text);
+  if (!serial) usage_error("invalid SERIAL: " + serial.error().reason);
+  return *serial;
+}
+
+std::uint8_t checked_speed(int speed) {
+  if (speed < 0 || speed > kMaxSpeedPercent) {
+    usage_error("--speed " + std::to_string(speed) + " is outside 0 to 100 %");
+  }
+  return static_cast<std::uint8_t>(speed);
+}
+
+Direction checked_direction(const std::string& word, bool allow_shortest) {
+  const auto direction = parse_direction(word, allow_shortest);
+  if (!direction) {
+    usage_error("--direction '" + word + "' is not " +
+                (allow_shortest ? "open, close or shortest" : "open or close"));
+  }
+  return *direction;
+}
+
+float checked_degrees(double degrees) {
+  // The wire has 0.1 degree resolution; compare in tenths so 359.9 itself is accepted.
+  if (!std::isfinite(degrees) || degrees < 0.0 || std::round(degrees * 10.0) > kMaxDegrees * 10.0) {
+    std::ostringstream text;
+    text << "--to " << degrees << " is outside 0 to 359.9 degrees";
+    usage_error(text.str());
+  }
+  return static_cast<float>(degrees);
+}
+
+void build_command(Parser& parser, CLI::App* used) {
+  RawArguments& raw = parser.raw;
+  CommandRequest& request = parser.invocation.command;
+  ValveCommand& command = request.command;
+  request.subcommand = used->get_name();
+  request.wait = raw.wait;
+  request.wait_timeout = seconds_option("--wait-timeout", raw.wait_timeout_seconds);
+
+  if (used == parser.stop) {
+    if (raw.all == !raw.serial.empty()) usage_error("stop: give either a SERIAL or --all");
+    request.every_online_valve = raw.all;
+  }
+  if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
+
+  if (used == parser.move) {
+    command.kind(COMMAND_TARGET_DEGREES);
+    command.degrees(checked_degrees(raw.degrees));
+    command.speed_percent(checked_speed(raw.speed));
+    command.direction(checked_direction(raw.direction, /*allow_shortest=*/true));
+  } else if (used == parser.stop) {
+    command.kind(COMMAND_STOP);
+  } else if (used == parser.manual) {
+    command.kind(COMMAND_MANUAL);
+    command.speed_percent(checked_speed(raw.speed));
+    command.direction(checked_direction(raw.direction, /*allow_shortest=*/false));
+  } else if (used == parser.jog) {
+    command.kind(COMMAND_MILLISECONDS_TO_RUN);
+    if (raw.milliseconds < 0 || raw.milliseconds > kMaxMilliseconds) {
+      usage_error("--ms " + std::to_string(raw.milliseconds) + " is outside 0 to 65535");
+    }
+    command.milliseconds(static_cast<std::uint16_t>(raw.milliseconds));
+    command.speed_percent(checked_speed(raw.speed));
+    command.direction(checked_direction(raw.direction, /*allow_shortest=*/false));
+    // The run itself may take longer than the default backstop.
+    if (parser.wait_timeout->count() == 0) {
+      request.wait_timeout += std::chrono::milliseconds(raw.milliseconds);
+    }
+  } else if (used == parser.clear_errors) {
+    command.kind(COMMAND_CLEAR_ERRORS);
+  } else if (used == parser.request) {
+    command.kind(COMMAND_REQUEST);
+    const auto telemetry = parse_telemetry(raw.what);
+    if (!telemetry) {
+      usage_error("request: '" + raw.what +
+                  "' is not one of version position temperature voltage current dps speed "
+                  "run-time cycle-counts");
+    }
+    if (raw.every_tenths < 0 || raw.every_tenths > kMaxResendTenths) {
+      usage_error("--every " + std::to_string(raw.every_tenths) +
+                  " is outside 0 to 255 tenths of a second");
+    }
+    if (*telemetry == TELEMETRY_VERSION && raw.every_tenths != 0) {
+      usage_error("request version: a valve sends its version once; --every is not allowed");
+    }
+    command.telemetry(*telemetry);
+    command.resend_tenths(static_cast<std::uint8_t>(raw.every_tenths));
+  } else if (used == parser.baud) {
+    const bool set = parser.bit_rate->count() > 0;
+    if (set == raw.baud_request) usage_error("baud: give either --request or --set RATE");
+    if (set) {
+      if (raw.bit_rate != codec::kBitRate250k && raw.bit_rate != codec::kBitRate500k) {
+        usage_error("--set " + std::to_string(raw.bit_rate) + " is not 250000 or 500000");
+      }
+      command.kind(COMMAND_SET_BAUD_RATE);
+      command.bit_rate(static_cast<std::uint32_t>(raw.bit_rate));
+    } else {
+      command.kind(COMMAND_REQUEST_BAUD_RATE);
+    }
+  }
+}
+
+void build_invocation(Parser& parser) {
+  Invocation& invocation = parser.invocation;
+  invocation.global.timeout = seconds_option("--timeout", parser.raw.timeout_seconds);
+  CLI::App* used = parser.app.get_subcommands().front();
+  if (used == parser.list) {
+    invocation.subcommand = Subcommand::kList;
+  } else if (used == parser.watch) {
+    invocation.subcommand = Subcommand::kWatch;
+    invocation.watch.interval = std::chrono::milliseconds(parser.raw.interval_ms);
+    if (parser.duration->count() > 0) {
+      invocation.watch.duration = seconds_option("--duration", parser.raw.duration_seconds);
+    }
+  } else {
+    invocation.subcommand = Subcommand::kCommand;
+    build_command(parser, used);
+  }
+}
+
+}  // namespace
+
+ParseOutcome parse_command_line(int argc, const char* const* argv) {
+  Parser parser;
+  define(parser);
+  ParseOutcome outcome;
+  std::ostringstream out;
+  std::ostringstream err;
+  try {
+    parser.app.parse(argc, argv);
+    for (CLI::App* subcommand : parser.app.get_subcommands()) {
+      if (auto* option = subcommand->get_option_no_throw("--wait-timeout")) {
+        parser.wait_timeout = option;
+      }
+    }
+    build_invocation(parser);
+  } catch (const CLI::ParseError& error) {
+    // Help and --version exit 0; every other parse error is a usage error (EX_USAGE).
+    const int cli_code = parser.app.exit(error, out, err);
+    outcome.exit_code = cli_code == 0 ? kExitOk : kExitUsage;
+    outcome.out = out.str();
+    outcome.err = err.str();
+    return outcome;
+  }
+  outcome.invocation = std::move(parser.invocation);
+  return outcome;
+}
+
+}  // namespace teejet::valvectl

@@ -1,0 +1,65 @@
+#pragma once
+
+// valvectl's command line: what the user asked for, checked before anything touches DDS. Every
+// value the gateway would refuse is refused here first, with a message that names the option, so
+// that a typo never costs a discovery round-trip and never reaches a valve.
+
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "teejet/valve.h"
+
+namespace teejet::valvectl {
+
+struct GlobalOptions {
+  int domain = 0;
+  std::string profile_file;  // Fast DDS XML profiles; empty: Fast DDS's own defaults
+  bool json = false;
+  // How long to look for gateways and valves, and to wait for a command's first status.
+  std::chrono::milliseconds timeout{5000};
+};
+
+struct ListOptions {
+  unsigned wait_for_online = 0;  // wait until at least this many valves are online
+};
+
+struct WatchOptions {
+  std::chrono::milliseconds interval{1000};
+  std::optional<std::chrono::milliseconds> duration;  // nullopt: until Ctrl-C
+};
+
+// A valve command subcommand: the command to write to each valve and how far to follow it.
+struct CommandRequest {
+  std::string subcommand;                         // "move", for messages
+  std::vector<std::uint32_t> serials;             // the valves named on the command line
+  bool every_online_valve = false;                // stop --all
+  ValveCommand command;                           // serial, command_id and origin are set per send
+  bool wait = false;                              // follow each command to its final status
+  std::chrono::milliseconds wait_timeout{60000};  // backstop when no final status arrives
+};
+
+enum class Subcommand { kList, kWatch, kCommand };
+
+struct Invocation {
+  GlobalOptions global;
+  Subcommand subcommand = Subcommand::kList;
+  ListOptions list;
+  WatchOptions watch;
+  CommandRequest command;
+};
+
+// Either an invocation to run, or an exit status with what to print first (help and version on
+// `out`, usage errors on `err`).
+struct ParseOutcome {
+  std::optional<Invocation> invocation;
+  int exit_code = 0;
+  std::string out;
+  std::string err;
+};
+
+ParseOutcome parse_command_line(int argc, const char* const* argv);
+
+}  // namespace teejet::valvectl

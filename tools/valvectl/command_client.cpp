@@ -1,0 +1,135 @@
+#include "command_client.hpp"
+
+#include <unistd.h>
+
+#include <array>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "teejet/dds/topics.hpp"
+#include "teejet/valvePubSubTypes.h"
+
+namespace teejet::valvectl {
+
+using eprosima::fastdds::dds::DataReader;
+using eprosima::fastdds::dds::SampleInfo;
+using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
+
+namespace {
+
+constexpr std::size_t kMaxOriginLength = 64;  // string<64> in the IDL
+constexpr auto kMatchPoll = std::chrono::milliseconds(10);
+
+// Ids start at a random point: a restarted valvectl with a recycled PID (same origin) must not
+// pick up statuses that belong to its predecessor.
+std::uint32_t random_first_id() {
+  std::random_device entropy;
+  std::uniform_int_distribution<std::uint32_t> pick(1, 0x7FFFFFFF);
+  return pick(entropy);
+}
+
+bool wait_for_match(const std::function<int()>& matched, std::size_t wanted, Deadline until,
+                    const std::atomic<bool>& interrupted) {
+  // Fast DDS offers no wait on a matched count without a listener; polling is cheap and short.
+  while (static_cast<std::size_t>(matched()) < wanted) {
+    if (interrupted || std::chrono::steady_clock::now() >= until) return matched() > 0;
+    std::this_thread::sleep_for(kMatchPoll);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string default_origin() {
+  std::array<char, 256> host{};
+  if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
+  const std::string pid = ":" + std::to_string(::getpid());
+  std::string origin = "valvectl@" + std::string(host.data());
+  // Keep the PID, which tells two runs on one host apart, when a long host name must be cut.
+  origin.resize(std::min(origin.size(), kMaxOriginLength - pid.size()));
+  return origin + pid;
+}
+
+CommandClient::CommandClient(dds::Participant& participant, std::string origin)
+    : participant_(participant), origin_(std::move(origin)), next_id_(random_first_id()) {
+  status_reader_ =
+      participant_.reader(participant_.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus),
+                          dds::topics::status_reader_qos(), nullptr);
+  status_reader_->set_listener(this, eprosima::fastdds::dds::StatusMask::data_available());
+}
+
+CommandClient::~CommandClient() {
+  // The participant outlives this client: delete the reader while its listener still exists.
+  status_reader_->set_listener(nullptr);
+  // Fast DDS 2.9 hands out the owning subscriber and publisher as const only.
+  const_cast<eprosima::fastdds::dds::Subscriber*>(status_reader_->get_subscriber())
+      ->delete_datareader(status_reader_);
+  if (command_writer_ != nullptr) {
+    const_cast<eprosima::fastdds::dds::Publisher*>(command_writer_->get_publisher())
+        ->delete_datawriter(command_writer_);
+  }
+}
+
+bool CommandClient::connect(std::size_t gateways, Deadline until,
+                            const std::atomic<bool>& interrupted) {
+  const std::size_t wanted = std::max<std::size_t>(gateways, 1);
+  const bool reader_matched = wait_for_match(
+      [this] {
+        eprosima::fastdds::dds::SubscriptionMatchedStatus status;
+        status_reader_->get_subscription_matched_status(status);
+        return status.current_count;
+      },
+      wanted, until, interrupted);
+  if (!reader_matched) return false;
+  if (command_writer_ == nullptr) {
+    command_writer_ =
+        participant_.writer(participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand),
+                            dds::topics::command_writer_qos());
+  }
+  // Commands are VOLATILE: one written before the gateway's reader matched would be lost.
+  return wait_for_match(
+      [this] {
+        eprosima::fastdds::dds::PublicationMatchedStatus status;
+        command_writer_->get_publication_matched_status(status);
+        return status.current_count;
+      },
+      wanted, until, interrupted);
+}
+
+std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
+  const std::uint32_t id = next_id_++;
+  if (next_id_ == 0) next_id_ = 1;
+  command.command_id(id);
+  command.origin(origin_);
+  if (command_writer_ == nullptr || !command_writer_->write(&command)) return std::nullopt;
+  return id;
+}
+
+std::optional<CommandStatus> CommandClient::next_status(std::uint32_t id, Deadline until) {
+  std::unique_lock lock(mutex_);
+  auto& queue = statuses_[id];
+  if (!arrived_.wait_until(lock, until, [&] { return !queue.empty(); })) return std::nullopt;
+  CommandStatus status = std::move(queue.front());
+  queue.pop_front();
+  return status;
+}
+
+void CommandClient::on_data_available(DataReader* reader) {
+  // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener.
+  std::vector<CommandStatus> ours;
+  CommandStatus status;
+  SampleInfo info;
+  while (reader->take_next_sample(&status, &info) == ReturnCode::RETCODE_OK) {
+    if (info.valid_data && status.origin().to_string() == origin_) ours.push_back(status);
+  }
+  if (ours.empty()) return;
+  std::lock_guard lock(mutex_);
+  for (const CommandStatus& taken : ours) statuses_[taken.command_id()].push_back(taken);
+  arrived_.notify_all();
+}
+
+}  // namespace teejet::valvectl

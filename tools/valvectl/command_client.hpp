@@ -1,0 +1,65 @@
+#pragma once
+
+// Writes ValveCommands and follows their CommandStatus. Every command gets a fresh command_id
+// and the origin "valvectl@HOST:PID"; statuses of other senders are ignored, so several valvectl
+// runs and ECUs can command the same domain at once.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "teejet/dds/participant.hpp"
+#include "valve_view.hpp"
+
+namespace teejet::valvectl {
+
+// "valvectl@HOST:PID", at most 64 characters (the IDL's bound).
+std::string default_origin();
+
+class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  // Subscribes to command status at once; the command writer is created by connect().
+  CommandClient(dds::Participant& participant, std::string origin);  // throws dds::DdsError
+  ~CommandClient() override;
+  CommandClient(const CommandClient&) = delete;
+  CommandClient& operator=(const CommandClient&) = delete;
+
+  // Waits until `gateways` gateways (at least one) match the status reader, then creates the
+  // command writer and waits until they match it too. Status is VOLATILE, so a status written
+  // before the gateway knows this reader would be lost: announcing the writer only after the
+  // reader has matched gives the gateway a discovery round-trip to learn of the reader first.
+  // Returns false when not even one gateway matched both by `until` or when interrupted.
+  bool connect(std::size_t gateways, Deadline until, const std::atomic<bool>& interrupted);
+
+  // Writes `command` with a fresh command_id and this client's origin; returns the id, or
+  // nullopt when the write failed. Requires connect().
+  std::optional<std::uint32_t> send(ValveCommand command);
+
+  // The next status of command `id` not returned before, in the order the gateway wrote them;
+  // nullopt when none arrives by `until`.
+  std::optional<CommandStatus> next_status(std::uint32_t id, Deadline until);
+
+  const std::string& origin() const { return origin_; }
+
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+
+ private:
+  dds::Participant& participant_;
+  const std::string origin_;
+  eprosima::fastdds::dds::DataReader* status_reader_ = nullptr;
+  eprosima::fastdds::dds::DataWriter* command_writer_ = nullptr;
+  std::uint32_t next_id_;
+
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::map<std::uint32_t, std::deque<CommandStatus>> statuses_;  // by command_id, not yet read
+};
+
+}  // namespace teejet::valvectl

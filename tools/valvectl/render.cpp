@@ -1,0 +1,180 @@
+#include "render.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "names.hpp"
+#include "teejet/bridge/conversions.hpp"
+#include "teejet/codec/codec.hpp"
+
+namespace teejet::valvectl {
+namespace {
+
+std::string address_text(std::uint8_t address) {
+  char text[8];
+  std::snprintf(text, sizeof text, "0x%02X", address);
+  return text;
+}
+
+std::string errors_text(const std::set<ErrorKind>& errors) {
+  if (errors.empty()) return "-";
+  std::string text;
+  for (const ErrorKind kind : errors) {
+    if (!text.empty()) text += ',';
+    text += to_string(kind);
+  }
+  return text;
+}
+
+std::string upper(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return text;
+}
+
+// Strings bare, numbers as JSON writes them (values are already rounded to their resolution).
+std::string scalar_text(const nlohmann::json& value) {
+  if (value.is_string()) return value.get<std::string>();
+  return value.dump();
+}
+
+}  // namespace
+
+std::string one_decimal(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", value);
+  return text;
+}
+
+std::string render_table(const std::vector<ValveRow>& rows) {
+  enum Align { kLeft, kRight };
+  struct Column {
+    const char* header;
+    Align align;
+  };
+  const std::vector<Column> columns = {
+      {"SERIAL", kLeft},  {"ADDR", kLeft},   {"ONLINE", kLeft}, {"POS_DEG", kRight},
+      {"TEMP_C", kRight}, {"VOLTS", kRight}, {"ERRORS", kLeft}, {"GATEWAY", kLeft},
+  };
+  std::vector<std::vector<std::string>> cells;
+  for (const ValveRow& row : rows) {
+    cells.push_back({
+        codec::format_serial(row.serial),
+        address_text(row.address),
+        row.boot_mode ? "boot" : (row.online ? "yes" : "no"),
+        row.position_degrees ? one_decimal(*row.position_degrees) : "-",
+        row.temperature_c ? std::to_string(*row.temperature_c) : "-",
+        row.volts ? one_decimal(*row.volts) : "-",
+        errors_text(row.errors),
+        row.gateway,
+    });
+  }
+  std::vector<std::size_t> widths;
+  for (const Column& column : columns) widths.push_back(std::string(column.header).size());
+  for (const auto& line : cells) {
+    for (std::size_t i = 0; i < line.size(); ++i) widths[i] = std::max(widths[i], line[i].size());
+  }
+  const auto append_line = [&](std::ostringstream& out, const std::vector<std::string>& line) {
+    std::string text;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      const std::string padding(widths[i] - line[i].size(), ' ');
+      text += columns[i].align == kRight ? padding + line[i] : line[i] + padding;
+      if (i + 1 < line.size()) text += "  ";
+    }
+    // The last column is left-aligned: no trailing blanks.
+    text.erase(text.find_last_not_of(' ') + 1);
+    out << text << '\n';
+  };
+  std::ostringstream out;
+  std::vector<std::string> header;
+  for (const Column& column : columns) header.emplace_back(column.header);
+  append_line(out, header);
+  for (const auto& line : cells) append_line(out, line);
+  return out.str();
+}
+
+std::string render_gateways(const std::vector<GatewaySummary>& gateways) {
+  std::ostringstream out;
+  for (const GatewaySummary& gateway : gateways) {
+    out << "gateway " << gateway.name;
+    if (!gateway.can_interface.empty()) out << " on " << gateway.can_interface;
+    out << ": " << to_string(gateway.bus_state) << ", " << gateway.valves_online << '/'
+        << gateway.valves_known << " valves online, " << gateway.frames_in << " frames in, "
+        << gateway.frames_out << " out, " << gateway.decode_errors << " decode errors\n";
+  }
+  return out.str();
+}
+
+nlohmann::json to_json(const ValveRow& row) {
+  nlohmann::json errors = nlohmann::json::array();
+  for (const ErrorKind kind : row.errors) errors.push_back(std::string(to_string(kind)));
+  const auto optional = [](const auto& value) -> nlohmann::json {
+    if (!value) return nullptr;
+    return *value;
+  };
+  return {
+      {"serial", codec::format_serial(row.serial)},
+      {"address", row.address},
+      {"online", row.online},
+      {"boot_mode", row.boot_mode},
+      {"position", optional(row.position_degrees)},
+      {"temperature_c", optional(row.temperature_c)},
+      {"volts", optional(row.volts)},
+      {"errors", errors},
+      {"gateway", row.gateway},
+  };
+}
+
+nlohmann::json to_json(const std::vector<ValveRow>& rows) {
+  nlohmann::json array = nlohmann::json::array();
+  for (const ValveRow& row : rows) array.push_back(to_json(row));
+  return array;
+}
+
+std::string status_text(const CommandStatus& status) {
+  std::string text = codec::format_serial(status.serial()) + ' ' +
+                     bridge::to_string(status.kind()) + " #" + std::to_string(status.command_id()) +
+                     ": " + upper(bridge::to_string(status.state()));
+  if (status.reason().size() > 0) text += ": " + status.reason().to_string();
+  return text;
+}
+
+nlohmann::json status_json(const CommandStatus& status) {
+  return {
+      {"event", "status"},
+      {"serial", codec::format_serial(status.serial())},
+      {"command_id", status.command_id()},
+      {"origin", status.origin().to_string()},
+      {"kind", bridge::to_string(status.kind())},
+      {"state", bridge::to_string(status.state())},
+      {"reason", status.reason().to_string()},
+      {"stamp_ns", status.stamp_ns()},
+  };
+}
+
+std::string position_text(std::uint32_t serial, double degrees) {
+  return codec::format_serial(serial) + " position " + one_decimal(degrees);
+}
+
+nlohmann::json position_json(std::uint32_t serial, double degrees) {
+  return {{"event", "position"}, {"serial", codec::format_serial(serial)}, {"degrees", degrees}};
+}
+
+std::string reply_text(std::uint32_t serial, const std::string& name, const Reply& reply) {
+  std::string text = codec::format_serial(serial) + ' ' + name;
+  for (const auto& [field, value] : reply.values.items()) {
+    text += ' ' + field + '=' + scalar_text(value);
+  }
+  return text;
+}
+
+nlohmann::json reply_json(std::uint32_t serial, const std::string& name, const Reply& reply) {
+  return {{"event", "reply"},
+          {"serial", codec::format_serial(serial)},
+          {"reply", name},
+          {"values", reply.values},
+          {"received_ns", reply.received_ns}};
+}
+
+}  // namespace teejet::valvectl

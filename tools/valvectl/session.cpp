@@ -1,0 +1,342 @@
+#include "session.hpp"
+
+#include <algorithm>
+#include <ctime>
+#include <iomanip>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <variant>
+#include <vector>
+
+#include "command_client.hpp"
+#include "exit_codes.hpp"
+#include "render.hpp"
+#include "teejet/codec/codec.hpp"
+#include "valve_view.hpp"
+
+namespace teejet::valvectl {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+// After the directory is complete, how long `list` waits for online valves' first telemetry.
+constexpr milliseconds kTelemetryGrace{1000};
+// A reply sample is published right after the status that completes its request.
+constexpr milliseconds kReplyGrace{1000};
+// How often a waiting command looks at the valve's position to show progress.
+constexpr milliseconds kProgressPeriod{100};
+// Longest wait before watch's first frame, so it does not start with an empty table.
+constexpr milliseconds kWatchFirstFrame{2000};
+
+bool shows_progress(CommandKind kind) {
+  return kind == COMMAND_TARGET_DEGREES || kind == COMMAND_DEGREES_FROM_POSITION ||
+         kind == COMMAND_MILLISECONDS_TO_RUN;
+}
+
+// The reply a completed command's answer arrives as, if it has one.
+std::optional<std::string> awaited_reply(const ValveCommand& command) {
+  if (command.kind() == COMMAND_REQUEST) return reply_name(command.telemetry());
+  if (command.kind() == COMMAND_REQUEST_BAUD_RATE) return std::string(kBaudRateReply);
+  return std::nullopt;
+}
+
+std::string seconds_text(milliseconds duration) {
+  std::ostringstream text;
+  text << std::chrono::duration<double>(duration).count() << " s";
+  return text.str();
+}
+
+class Session {
+ public:
+  Session(const Invocation& invocation, const Terminal& terminal)
+      : invocation_(invocation),
+        terminal_(terminal),
+        participant_({.domain = invocation.global.domain,
+                      .profile_file = invocation.global.profile_file,
+                      .name = "valvectl"}),
+        view_(participant_) {}
+
+  int run() {
+    switch (invocation_.subcommand) {
+      case Subcommand::kList:
+        return list();
+      case Subcommand::kWatch:
+        return watch();
+      case Subcommand::kCommand:
+        return command();
+    }
+    return kExitFailure;
+  }
+
+ private:
+  // ---- Output --------------------------------------------------------------------------
+
+  // One line per event, flushed at once: scripts read valvectl's output as it happens.
+  void emit(const std::string& text, const nlohmann::json& json) {
+    terminal_.out << (invocation_.global.json ? json.dump() : text) << '\n' << std::flush;
+  }
+
+  void complain(const std::string& message) {
+    terminal_.err << "valvectl: " << message << '\n' << std::flush;
+  }
+
+  std::string domain_text() const { return "domain " + std::to_string(invocation_.global.domain); }
+
+  Deadline after_timeout() const { return Clock::now() + invocation_.global.timeout; }
+
+  bool discover_directory(Deadline until) {
+    return view_.wait_until([](const ValveTable& table) { return table.directory_complete(); },
+                            until, terminal_.interrupted);
+  }
+
+  // ---- list and watch --------------------------------------------------------------------
+
+  int list() {
+    const Deadline until = after_timeout();
+    const unsigned wanted = invocation_.list.wait_for_online;
+    const bool complete = view_.wait_until(
+        [&](const ValveTable& table) {
+          return table.directory_complete() && table.online_count() >= wanted;
+        },
+        until, terminal_.interrupted);
+    if (terminal_.interrupted) return kExitInterrupted;
+    if (complete) {
+      // Telemetry is durable too and follows presence closely; do not print a row of dashes
+      // for a valve whose values are on their way.
+      view_.wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
+                       std::min(until, Deadline(Clock::now() + kTelemetryGrace)),
+                       terminal_.interrupted);
+    }
+    const ValveTable table = view_.snapshot();
+    if (table.empty()) {
+      complain("no gateway found on " + domain_text());
+      return kExitNotFound;
+    }
+    print_table(table, /*with_gateways=*/false);
+    if (table.online_count() < wanted) {
+      complain("only " + std::to_string(table.online_count()) + " of " + std::to_string(wanted) +
+               " valves are online on " + domain_text() + " after " +
+               seconds_text(invocation_.global.timeout));
+      return kExitNotFound;
+    }
+    return kExitOk;
+  }
+
+  void print_table(const ValveTable& table, bool with_gateways) {
+    if (invocation_.global.json) {
+      terminal_.out << to_json(table.rows()).dump() << '\n';
+    } else {
+      if (with_gateways) terminal_.out << render_gateways(table.gateways());
+      terminal_.out << render_table(table.rows());
+    }
+    terminal_.out << std::flush;
+  }
+
+  int watch() {
+    const auto started = Clock::now();
+    const Deadline end =
+        invocation_.watch.duration ? started + *invocation_.watch.duration : Deadline::max();
+    const auto never = [](const ValveTable&) { return false; };
+    discover_directory(std::min({after_timeout(), Deadline(started + kWatchFirstFrame), end}));
+    for (auto next = Clock::now();;) {
+      if (terminal_.interrupted) return kExitOk;  // Ctrl-C is how a watch normally ends
+      draw_frame();
+      if (Clock::now() >= end) return kExitOk;
+      // Keep the rhythm, but never try to catch up on frames a slow terminal made us miss.
+      next = std::max(next + invocation_.watch.interval, Clock::now());
+      view_.wait_until(never, std::min(next, end), terminal_.interrupted);
+    }
+  }
+
+  void draw_frame() {
+    const ValveTable table = view_.snapshot();
+    if (!invocation_.global.json) {
+      if (terminal_.out_is_tty) terminal_.out << "\x1b[H\x1b[2J";  // home, clear screen
+      const std::time_t now = std::time(nullptr);
+      std::tm local{};
+      localtime_r(&now, &local);
+      terminal_.out << "valvectl watch: " << domain_text() << ", "
+                    << std::put_time(&local, "%H:%M:%S") << '\n';
+      if (table.empty()) terminal_.out << "no gateway found yet\n";
+    }
+    print_table(table, /*with_gateways=*/true);
+    // Into a pipe or file, frames follow each other: a blank line tells them apart.
+    if (!invocation_.global.json && !terminal_.out_is_tty) terminal_.out << '\n' << std::flush;
+  }
+
+  // ---- Commands --------------------------------------------------------------------------
+
+  // The serials to command, or the exit status that says why there are none.
+  std::variant<std::vector<std::uint32_t>, int> find_targets() {
+    const CommandRequest& request = invocation_.command;
+    const Deadline until = after_timeout();
+    if (request.every_online_valve) {
+      discover_directory(until);
+      if (terminal_.interrupted) return kExitInterrupted;
+      const ValveTable table = view_.snapshot();
+      if (table.empty()) {
+        complain("no gateway found on " + domain_text());
+        return kExitNotFound;
+      }
+      std::vector<std::uint32_t> online;
+      for (const ValveRow& row : table.rows()) {
+        if (row.online) online.push_back(row.serial);
+      }
+      if (online.empty()) complain("no valve is online on " + domain_text());
+      return online;
+    }
+    for (const std::uint32_t serial : request.serials) {
+      // Done when the valve shows up, or early when every gateway has told all it knows.
+      view_.wait_until(
+          [&](const ValveTable& table) { return table.row(serial) || table.directory_complete(); },
+          until, terminal_.interrupted);
+      if (terminal_.interrupted) return kExitInterrupted;
+      const ValveTable table = view_.snapshot();
+      if (table.row(serial)) continue;
+      if (table.empty()) {
+        complain("no gateway found on " + domain_text());
+      } else {
+        complain("valve " + codec::format_serial(serial) + " is not known to any gateway on " +
+                 domain_text());
+      }
+      return kExitNotFound;
+    }
+    return request.serials;
+  }
+
+  int command() {
+    auto targets = find_targets();
+    if (const int* exit_code = std::get_if<int>(&targets)) return *exit_code;
+    const auto& serials = std::get<std::vector<std::uint32_t>>(targets);
+    if (serials.empty()) return kExitOk;
+
+    // Every gateway that owns one of the valves must hear the command.
+    const ValveTable table = view_.snapshot();
+    std::set<std::string> gateways;
+    for (const std::uint32_t serial : serials) gateways.insert(table.row(serial)->gateway);
+    const std::size_t expected_gateways = std::max(gateways.size(), table.gateways().size());
+
+    CommandClient client(participant_, default_origin());
+    if (!client.connect(expected_gateways, after_timeout(), terminal_.interrupted)) {
+      if (terminal_.interrupted) return kExitInterrupted;
+      complain("no gateway on " + domain_text() + " subscribes to commands");
+      return kExitNotFound;
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> sent;  // serial, command id
+    for (const std::uint32_t serial : serials) {
+      ValveCommand command = invocation_.command.command;
+      command.serial(serial);
+      const auto id = client.send(command);
+      if (!id) {
+        complain("could not write the command for " + codec::format_serial(serial));
+        return kExitFailure;
+      }
+      sent.emplace_back(serial, *id);
+    }
+    int worst = kExitOk;
+    for (const auto& [serial, id] : sent) worst = std::max(worst, follow(client, serial, id));
+    return worst;
+  }
+
+  // Prints the command's statuses up to the first one (or, with --wait, the final one) and
+  // returns what they mean as an exit status.
+  int follow(CommandClient& client, std::uint32_t serial, std::uint32_t id) {
+    const CommandRequest& request = invocation_.command;
+    const auto first = client.next_status(id, after_timeout());
+    if (!first) {
+      complain("no status for command #" + std::to_string(id) + " to " +
+               codec::format_serial(serial) + " within " +
+               seconds_text(invocation_.global.timeout));
+      return kExitTimedOut;
+    }
+    emit(status_text(*first), status_json(*first));
+    if (first->state() == COMMAND_REJECTED) return kExitRejected;
+    if (!request.wait) return exit_code_of(first->state());
+
+    const Deadline until = Clock::now() + request.wait_timeout;
+    std::optional<double> shown_position;
+    CommandStatus latest = *first;
+    while (latest.state() == COMMAND_ACCEPTED) {
+      const auto status =
+          client.next_status(id, std::min(until, Deadline(Clock::now() + kProgressPeriod)));
+      if (status) {
+        latest = *status;
+        // The final position goes before the final status, which stays the last line.
+        if (latest.state() == COMMAND_COMPLETED && shows_progress(request.command.kind())) {
+          show_position(serial, shown_position);
+        }
+        emit(status_text(latest), status_json(latest));
+        continue;
+      }
+      if (terminal_.interrupted) {
+        complain("stopped waiting; the valve was not stopped");
+        return kExitInterrupted;
+      }
+      if (Clock::now() >= until) {
+        complain("no final status for command #" + std::to_string(id) + " to " +
+                 codec::format_serial(serial) + " within " + seconds_text(request.wait_timeout));
+        return kExitTimedOut;
+      }
+      if (shows_progress(request.command.kind())) show_position(serial, shown_position);
+    }
+    if (latest.state() == COMMAND_COMPLETED) print_reply(serial, first->stamp_ns());
+    return exit_code_of(latest.state());
+  }
+
+  static int exit_code_of(CommandState state) {
+    switch (state) {
+      case COMMAND_ACCEPTED:
+      case COMMAND_COMPLETED:
+        return kExitOk;
+      case COMMAND_REJECTED:
+        return kExitRejected;
+      case COMMAND_TIMED_OUT:
+        return kExitTimedOut;
+      case COMMAND_SUPERSEDED:
+        return kExitSuperseded;
+    }
+    return kExitFailure;
+  }
+
+  void show_position(std::uint32_t serial, std::optional<double>& shown) {
+    const auto row = view_.snapshot().row(serial);
+    if (!row || !row->position_degrees || row->position_degrees == shown) return;
+    shown = row->position_degrees;
+    emit(position_text(serial, *shown), position_json(serial, *shown));
+  }
+
+  // A request's answer: the first sample of its kind received after the command was accepted.
+  void print_reply(std::uint32_t serial, std::uint64_t accepted_ns) {
+    const auto name = awaited_reply(invocation_.command.command);
+    if (!name) return;
+    const auto fresh = [&](const ValveTable& table) {
+      const auto reply = table.reply(serial, *name);
+      return reply && reply->received_ns >= accepted_ns;
+    };
+    if (!view_.wait_until(fresh, Clock::now() + kReplyGrace, terminal_.interrupted)) return;
+    const Reply reply = *view_.snapshot().reply(serial, *name);
+    emit(reply_text(serial, *name, reply), reply_json(serial, *name, reply));
+  }
+
+  const Invocation& invocation_;
+  const Terminal& terminal_;
+  dds::Participant participant_;
+  ValveView view_;
+};
+
+}  // namespace
+
+int run(const Invocation& invocation, const Terminal& terminal) {
+  try {
+    Session session(invocation, terminal);
+    return session.run();
+  } catch (const dds::DdsError& error) {
+    terminal.err << "valvectl: " << error.what() << '\n';
+    return kExitFailure;
+  }
+}
+
+}  // namespace teejet::valvectl

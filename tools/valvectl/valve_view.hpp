@@ -1,0 +1,64 @@
+#pragma once
+
+// valvectl's window on the domain: subscribes to presence, telemetry, errors and gateway status
+// (durable topics, so a fresh valvectl sees everything at once) and keeps the latest per valve in
+// a ValveTable. Listeners only take samples into the table; callers wait on conditions over it.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <utility>
+#include <vector>
+
+#include "teejet/dds/participant.hpp"
+#include "valve_table.hpp"
+
+namespace teejet::valvectl {
+
+using Deadline = std::chrono::steady_clock::time_point;
+
+class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  explicit ValveView(dds::Participant& participant);  // throws dds::DdsError
+  ~ValveView() override;
+  ValveView(const ValveView&) = delete;
+  ValveView& operator=(const ValveView&) = delete;
+
+  ValveTable snapshot() const;
+
+  // Waits until `condition` holds (true), or `until` passes or `interrupted` is set (false).
+  // The condition runs with the table locked and must not call the view.
+  using Condition = std::function<bool(const ValveTable&)>;
+  bool wait_until(const Condition& condition, Deadline until,
+                  const std::atomic<bool>& interrupted) const;
+
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+
+ private:
+  using Reader = eprosima::fastdds::dds::DataReader*;
+  using Handler = std::function<void(Reader)>;
+  template <class PubSubType, class Sample>
+  Reader subscribe(dds::Participant& participant, const char* topic,
+                   std::function<void(const Sample&)> on_sample);
+  void take_errors(Reader reader);
+  // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
+  // matched count: asking it with mutex_ held would invert the lock order, so this runs first
+  // and stores the count in the table.
+  void update_gateways_matched() const;
+
+  std::map<Reader, Handler> handlers_;  // fixed after construction
+  Reader gateway_status_reader_ = nullptr;
+
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  mutable ValveTable table_;  // mutable: update_gateways_matched() refreshes a count in it
+  // Disposed samples carry no data: the instance handle says which error was cleared.
+  std::map<eprosima::fastrtps::rtps::InstanceHandle_t, std::pair<std::uint32_t, ErrorKind>>
+      error_instances_;
+};
+
+}  // namespace teejet::valvectl
