@@ -151,6 +151,7 @@ TEST_F(BridgeTest, MalformedFramesAreCountedAndReportedInGatewayStatus) {
   EXPECT_EQ(bridge.counters().decode_errors, 1u);
   EXPECT_EQ(bridge.counters().last_decode_error, "position needs 3 bytes, got 2");
   bridge.tick(kStart);
+  bridge.tick(kStart + 1s);
   ASSERT_EQ(sink.gateway.size(), 1u);
   EXPECT_EQ(sink.gateway[0].decode_errors(), 1u);
   EXPECT_EQ(sink.gateway[0].gateway().to_string(), "gw-test");
@@ -457,17 +458,22 @@ TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
   EXPECT_EQ(sink.states_of(101), std::vector{COMMAND_ACCEPTED});
 }
 
-TEST_F(BridgeTest, GatewayStatusOnceASecond) {
+TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
   Bridge bridge(config(), gateway_bus, sink);
-  announce(bridge, 0xD8, 1, kStart);
   bridge.tick(kStart);
-  bridge.tick(kStart + 500ms);
+  EXPECT_TRUE(sink.gateway.empty());  // no valve could have announced itself yet
+  announce(bridge, 0xD8, 1, kStart + 300ms);
+  bridge.tick(kStart + 999ms);
+  EXPECT_TRUE(sink.gateway.empty());
   bridge.tick(kStart + 1s);
+  bridge.tick(kStart + 1500ms);
+  bridge.tick(kStart + 2s);
   ASSERT_EQ(sink.gateway.size(), 2u);
-  EXPECT_EQ(sink.gateway[1].valves_online(), 1u);
-  EXPECT_EQ(sink.gateway[1].valves_known(), 1u);
-  EXPECT_EQ(sink.gateway[1].frames_out(), 9u);
-  EXPECT_EQ(sink.gateway[1].bus_state(), BUS_ERROR_ACTIVE);
+  EXPECT_EQ(sink.gateway[0].valves_online(), 1u);
+  EXPECT_EQ(sink.gateway[0].valves_known(), 1u);
+  EXPECT_EQ(sink.gateway[0].frames_out(), 9u);
+  EXPECT_EQ(sink.gateway[0].bus_state(), BUS_ERROR_ACTIVE);
+  EXPECT_EQ(sink.gateway[1].stamp_ns(), static_cast<std::uint64_t>((kStart + 2s).count()));
 }
 
 }  // namespace

@@ -414,7 +414,8 @@ void Bridge::tick(Timestamp now) {
     });
   }
 
-  if (now >= next_status_) {
+  if (!next_status_) next_status_ = now + 1s;
+  if (now >= *next_status_) {
     publish_gateway_status(now);
     next_status_ = now + 1s;
   }

@@ -141,7 +141,9 @@ class Bridge {
   directory::ValveDirectory directory_;
   std::map<std::uint32_t, ValveState> valves_;
   BridgeCounters counters_;
-  Timestamp next_status_{};
+  // The first status waits one I'm Here period, so that its valve count means something to a
+  // client that trusts it as the size of the directory.
+  std::optional<Timestamp> next_status_;
 };
 
 }  // namespace teejet::bridge
