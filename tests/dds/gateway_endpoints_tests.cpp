@@ -3,8 +3,6 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <atomic>
 #include <chrono>
@@ -13,8 +11,9 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <functional>
 #include <mutex>
-#include <thread>
 
+#include "support/eventually.hpp"
+#include "support/subprocess.hpp"
 #include "teejet/dds/gateway_endpoints.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -27,15 +26,8 @@ using eprosima::fastdds::dds::DataReader;
 using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
-// Polls `condition` until it holds or the deadline passes.
-bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds deadline = 10s) {
-  const auto until = std::chrono::steady_clock::now() + deadline;
-  while (std::chrono::steady_clock::now() < until) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(5ms);
-  }
-  return condition();
-}
+using teejet::testing::eventually;
+using teejet::testing::Subprocess;
 
 int test_domain() {
   // Shared memory is not separated by network namespaces: each test binary keeps to its own
@@ -80,12 +72,14 @@ TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
   auto* reader = late.reader(late.topic<ValvePresencePubSubType>(topics::kPresence),
                              topics::state_reader_qos());
   std::map<std::uint32_t, std::uint8_t> seen;
-  ASSERT_TRUE(eventually([&] {
-    for (auto& [sample, info] : take_all<ValvePresence>(reader)) {
-      if (info.valid_data) seen[sample.serial()] = sample.address();
-    }
-    return seen.size() == 3;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        for (auto& [sample, info] : take_all<ValvePresence>(reader)) {
+          if (info.valid_data) seen[sample.serial()] = sample.address();
+        }
+        return seen.size() == 3;
+      },
+      10s));
   EXPECT_EQ(seen[1], 0xDB);
   EXPECT_EQ(seen[2], 0xD9);
 }
@@ -98,10 +92,12 @@ TEST_F(GatewayEndpointsTest, TelemetryCarriesTheCanReceiveTimeAsSourceTimestamp)
   position.serial(4711);
   position.degrees(42.5f);
   position.received_ns(1'700'000'000'123'456'789);
-  ASSERT_TRUE(eventually([&] {
-    publisher.telemetry(position);
-    return reader->get_unread_count() > 0;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        publisher.telemetry(position);
+        return reader->get_unread_count() > 0;
+      },
+      10s));
   auto samples = take_all<ValvePosition>(reader);
   ASSERT_FALSE(samples.empty());
   EXPECT_FLOAT_EQ(samples[0].first.degrees(), 42.5f);
@@ -119,16 +115,19 @@ TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {
   error.value(17.2f);
   error.limit(16.5f);
   publisher.telemetry(error);
-  ASSERT_TRUE(eventually([&] { return reader->get_unread_count() > 0; }));
+  ASSERT_TRUE(eventually([&] { return reader->get_unread_count() > 0; }, 10s));
   (void)take_all<ValveError>(reader);
   publisher.error_cleared(9, ERROR_HIGH_VOLTAGE);
   bool disposed = false;
-  ASSERT_TRUE(eventually([&] {
-    for (auto& [sample, info] : take_all<ValveError>(reader)) {
-      disposed |= info.instance_state == eprosima::fastdds::dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE;
-    }
-    return disposed;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        for (auto& [sample, info] : take_all<ValveError>(reader)) {
+          disposed |=
+              info.instance_state == eprosima::fastdds::dds::NOT_ALIVE_DISPOSED_INSTANCE_STATE;
+        }
+        return disposed;
+      },
+      10s));
 }
 
 struct CommandLog {
@@ -159,11 +158,13 @@ TEST_F(GatewayEndpointsTest, EveryCommandArrivesInOrderWithItsWriter) {
   Participant ecu{{.domain = test_domain(), .name = "ecu"}};
   auto* writer =
       ecu.writer(ecu.topic<ValveCommandPubSubType>(topics::kCommand), topics::command_writer_qos());
-  ASSERT_TRUE(eventually([&] {
-    eprosima::fastdds::dds::PublicationMatchedStatus matched;
-    writer->get_publication_matched_status(matched);
-    return matched.current_count > 0;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus matched;
+        writer->get_publication_matched_status(matched);
+        return matched.current_count > 0;
+      },
+      10s));
   for (std::uint32_t id = 1; id <= 200; ++id) {
     ValveCommand command;
     command.serial(1);  // one instance: KEEP_LAST would drop, KEEP_ALL must not
@@ -193,15 +194,11 @@ TEST_F(GatewayEndpointsTest, AKilledCommanderIsReportedLostForTheFailSafe) {
         log.changed.notify_all();
       });
 
-  const std::string domain = std::to_string(test_domain());
-  char* const argv[] = {const_cast<char*>(COMMAND_WRITER_PATH), const_cast<char*>(domain.c_str()),
-                        const_cast<char*>("77"), nullptr};
-  pid_t child = 0;
-  ASSERT_EQ(posix_spawn(&child, COMMAND_WRITER_PATH, nullptr, nullptr, argv, environ), 0);
+  Subprocess commander({COMMAND_WRITER_PATH, std::to_string(test_domain()), "77"});
   ASSERT_TRUE(log.wait([&] { return !log.writers.empty(); }, 20s)) << "no command arrived";
   const auto killed_at = std::chrono::steady_clock::now();
-  ::kill(child, SIGKILL);
-  ::waitpid(child, nullptr, 0);
+  commander.signal(SIGKILL);
+  commander.wait(commander.elapsed() + 10s);  // reaps it
 
   ASSERT_TRUE(log.wait([&] { return !log.lost.empty(); }, 10s)) << "liveliness loss not seen";
   const auto noticed_after = std::chrono::steady_clock::now() - killed_at;

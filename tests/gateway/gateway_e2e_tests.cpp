@@ -7,11 +7,10 @@
 
 #include <chrono>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <functional>
 #include <map>
-#include <thread>
 
 #include "gateway.hpp"
+#include "support/eventually.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -25,14 +24,7 @@ using eprosima::fastdds::dds::DataWriter;
 using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
-bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds deadline = 15s) {
-  const auto until = std::chrono::steady_clock::now() + deadline;
-  while (std::chrono::steady_clock::now() < until) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return condition();
-}
+using teejet::testing::eventually;
 
 int domain_for_this_run() { return 100 + static_cast<int>(::getpid() % 100); }
 
@@ -71,11 +63,13 @@ class Ecu {
   std::uint32_t send(ValveCommand command) {
     command.command_id(++next_id_);
     command.origin("e2e-test");
-    EXPECT_TRUE(eventually([&] {
-      eprosima::fastdds::dds::PublicationMatchedStatus matched;
-      commands_->get_publication_matched_status(matched);
-      return matched.current_count > 0;
-    }));
+    EXPECT_TRUE(eventually(
+        [&] {
+          eprosima::fastdds::dds::PublicationMatchedStatus matched;
+          commands_->get_publication_matched_status(matched);
+          return matched.current_count > 0;
+        },
+        15s));
     EXPECT_TRUE(commands_->write(&command));
     return command.command_id();
   }
@@ -152,11 +146,14 @@ class GatewayE2E : public ::testing::Test {
  protected:
   void start(Gateway& gateway, std::size_t valves) {
     ASSERT_TRUE(gateway.start());
-    ASSERT_TRUE(eventually([&] {
-      const auto known = gateway.bridge().valves();
-      return known.size() == valves &&
-             std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
-    })) << "the gateway never saw its simulated valves";
+    ASSERT_TRUE(eventually(
+        [&] {
+          const auto known = gateway.bridge().valves();
+          return known.size() == valves &&
+                 std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
+        },
+        15s))
+        << "the gateway never saw its simulated valves";
   }
 };
 
@@ -166,7 +163,7 @@ TEST_F(GatewayE2E, ALateJoinerSeesEveryValveAtOnce) {
   Ecu late;
   auto* presence = late.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
   std::map<std::uint32_t, ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }));
+  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }, 15s));
   for (std::uint32_t serial = 1; serial <= 4; ++serial) {
     EXPECT_EQ(seen[serial].address(), 0xD8 + serial - 1);
     EXPECT_TRUE(seen[serial].online());
@@ -207,18 +204,21 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
   std::map<std::uint32_t, ValveCycleCount> cycle_counts;
   std::map<std::uint32_t, ValveError> error_samples;
   std::map<std::uint32_t, ValveBaudRate> baud_rates;
-  ASSERT_TRUE(eventually([&] {
-    return !latest_by_serial(version, versions).empty() &&
-           !latest_by_serial(position, positions).empty() &&
-           !latest_by_serial(temperature, temperatures).empty() &&
-           !latest_by_serial(voltage, voltages).empty() &&
-           !latest_by_serial(current, currents).empty() && !latest_by_serial(dps, speeds).empty() &&
-           !latest_by_serial(speed, directions).empty() &&
-           !latest_by_serial(run_time, run_times).empty() &&
-           !latest_by_serial(cycles, cycle_counts).empty() &&
-           !latest_by_serial(errors, error_samples).empty() &&
-           !latest_by_serial(baud, baud_rates).empty();
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        return !latest_by_serial(version, versions).empty() &&
+               !latest_by_serial(position, positions).empty() &&
+               !latest_by_serial(temperature, temperatures).empty() &&
+               !latest_by_serial(voltage, voltages).empty() &&
+               !latest_by_serial(current, currents).empty() &&
+               !latest_by_serial(dps, speeds).empty() &&
+               !latest_by_serial(speed, directions).empty() &&
+               !latest_by_serial(run_time, run_times).empty() &&
+               !latest_by_serial(cycles, cycle_counts).empty() &&
+               !latest_by_serial(errors, error_samples).empty() &&
+               !latest_by_serial(baud, baud_rates).empty();
+      },
+      15s));
   // The simulator's defaults (tools/valve-sim): 12.0 V, 25 °C, 180 dps configured, 250 kbit/s.
   EXPECT_FLOAT_EQ(voltages[1].volts(), 12.0f);
   EXPECT_EQ(temperatures[1].valve_c(), 25);
@@ -233,12 +233,14 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
   // Published once a second; the first may predate the valve's first I'm Here.
   GatewayStatus gateway_status;
   SampleInfo info;
-  ASSERT_TRUE(eventually([&] {
-    while (status->take_next_sample(&gateway_status, &info) == ReturnCode::RETCODE_OK) {
-      if (info.valid_data && gateway_status.valves_online() == 1) return true;
-    }
-    return false;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        while (status->take_next_sample(&gateway_status, &info) == ReturnCode::RETCODE_OK) {
+          if (info.valid_data && gateway_status.valves_online() == 1) return true;
+        }
+        return false;
+      },
+      15s));
   EXPECT_EQ(gateway_status.gateway().to_string(), "gw-telemetry");
   EXPECT_EQ(gateway_status.valves_online(), 1u);
   EXPECT_GT(gateway_status.frames_in(), 0u);
@@ -315,17 +317,19 @@ TEST_F(GatewayE2E, AReaddressedValveKeepsItsInstanceAndItsCommands) {
   Ecu ecu;
   auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
   std::map<std::uint32_t, ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }));
+  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }, 15s));
   EXPECT_EQ(seen[10].address(), 0xD8);
 
   sim::ValveConfig newcomer;
   newcomer.serial = 5;  // the lowest serial takes 0xD8: everyone else moves up
   newcomer.degrees_per_second = 180;
   ASSERT_TRUE(gateway.simulator()->add_valve(newcomer));
-  ASSERT_TRUE(eventually([&] {
-    latest_by_serial(presence, seen);
-    return seen.size() == 3 && seen[10].address() == 0xD9 && seen[11].address() == 0xDA;
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest_by_serial(presence, seen);
+        return seen.size() == 3 && seen[10].address() == 0xD9 && seen[11].address() == 0xDA;
+      },
+      15s));
   EXPECT_EQ(seen[5].address(), 0xD8);
 
   EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(move_to(10, 30.0f)))),
@@ -341,13 +345,15 @@ TEST_F(GatewayE2E, ValvesGoOfflineWhenTheirIAmHereStops) {
   Ecu ecu;
   auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
   std::map<std::uint32_t, ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }));
+  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }, 15s));
   const auto silenced_at = std::chrono::steady_clock::now();
   gateway.simulator()->stop();
-  ASSERT_TRUE(eventually([&] {
-    latest_by_serial(presence, seen);
-    return !seen[1].online() && !seen[2].online();
-  }));
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest_by_serial(presence, seen);
+        return !seen[1].online() && !seen[2].online();
+      },
+      15s));
   // Offline after 1.5 s of silence (configured), detected by a 50 ms clock: within 3 s.
   EXPECT_LT(std::chrono::steady_clock::now() - silenced_at, 3s);
   auto rejected = ecu.follow(ecu.send(move_to(1, 10.0f)));
@@ -363,7 +369,7 @@ TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
   Ecu ecu;
   auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
   std::map<std::uint32_t, ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }));
+  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }, 15s));
   EXPECT_EQ(seen[2].gateway().to_string(), "gw-left");
   EXPECT_EQ(seen[102].gateway().to_string(), "gw-right");
   // Both gateways use address 0xD8 on their own bus: identity is the serial, not the address.

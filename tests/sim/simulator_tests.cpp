@@ -8,15 +8,17 @@
 #include <functional>
 #include <optional>
 #include <sstream>
-#include <thread>
 
 #include "sim_test_support.hpp"
+#include "support/eventually.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace teejet::sim::testing {
 namespace {
+
+using teejet::testing::eventually;
 
 constexpr auto kDeadline = std::chrono::seconds(5);
 
@@ -65,11 +67,8 @@ class SimRuntime : public ::testing::Test {
   void command(std::uint8_t address, const codec::ToValveMessage& message) {
     const auto before = simulator->frames_handled();
     send(address, message);
-    const auto deadline = std::chrono::steady_clock::now() + kDeadline;
-    while (simulator->frames_handled() == before) {
-      ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "frame not handled";
-      std::this_thread::yield();
-    }
+    ASSERT_TRUE(eventually([&] { return simulator->frames_handled() != before; }, kDeadline))
+        << "frame not handled";
   }
 
   // The next valve frame, decoded; nullopt after the deadline.

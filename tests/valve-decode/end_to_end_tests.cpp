@@ -1,14 +1,7 @@
 // Runs the built valve-decode binary as a user would, on files and on standard input.
 
-#include <fcntl.h>
 #include <gtest/gtest.h>
-#include <poll.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <array>
-#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -17,9 +10,16 @@
 #include <string>
 #include <vector>
 
+#include "support/scratch_dir.hpp"
+#include "support/subprocess.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using teejet::testing::Finished;
+using teejet::testing::ScratchDir;
+using teejet::testing::Subprocess;
 
 constexpr const char* kValveDecode = VALVE_DECODE_PATH;
 constexpr const char* kSampleLog = SAMPLE_LOG_PATH;
@@ -28,10 +28,6 @@ constexpr const char* kSampleExpected = SAMPLE_EXPECTED_PATH;
 std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_file(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
 }
 
 bool is_json(const std::string& text) { return nlohmann::json::accept(text); }
@@ -43,71 +39,15 @@ std::vector<std::string> lines_of(const std::string& text) {
   return lines;
 }
 
-// A directory of its own per use; ctest may run these tests in parallel.
-class ScratchDir {
- public:
-  ScratchDir() {
-    static std::atomic<int> counter{0};
-    path_ = fs::path(testing::TempDir()) /
-            ("valve_decode_e2e_" + std::to_string(getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
-
-std::vector<char*> argv_of(std::vector<std::string>& arguments) {
-  std::vector<char*> argv;
-  for (auto& argument : arguments) argv.push_back(argument.data());
-  argv.push_back(nullptr);
-  return argv;
-}
-
-struct Run {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-int wait_for_exit(pid_t pid) {
-  int status = 0;
-  if (waitpid(pid, &status, 0) != pid) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-Run run_valve_decode(std::vector<std::string> arguments, const std::string& input = "") {
-  ScratchDir dir;
-  const auto stdin_path = (dir / "stdin").string();
-  const auto stdout_path = (dir / "stdout").string();
-  const auto stderr_path = (dir / "stderr").string();
-  write_file(stdin_path, input);
-
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, stdin_path.c_str(), O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, stdout_path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, stderr_path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+// valve-decode with `arguments`, reading `input` on standard input.
+Finished run_valve_decode(std::vector<std::string> arguments, const std::string& input = "") {
   arguments.insert(arguments.begin(), kValveDecode);
-  auto argv = argv_of(arguments);
-  pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, kValveDecode, &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    ADD_FAILURE() << "cannot start " << kValveDecode;
-    return {};
-  }
-  return Run{wait_for_exit(pid), read_file(stdout_path), read_file(stderr_path)};
+  Subprocess valve_decode(arguments, Subprocess::Input::kPipe);
+  valve_decode.write_input(input);
+  valve_decode.close_input();
+  auto finished = valve_decode.wait(30s);
+  EXPECT_FALSE(finished.timed_out) << "valve-decode did not exit";
+  return finished;
 }
 
 // Compares line by line so that a failure names the line, not a wall of text.
@@ -236,40 +176,19 @@ TEST(ValveDecodeEndToEnd, InvalidUtf8InALineStillGivesValidJson) {
 
 // `candump -L can0 | valve-decode` must show each frame as it arrives, not when a buffer fills.
 TEST(ValveDecodeEndToEnd, FlushesEachLineReadFromStandardInput) {
-  std::array<int, 2> to_child{};
-  std::array<int, 2> from_child{};
-  ASSERT_EQ(pipe2(to_child.data(), O_CLOEXEC), 0);
-  ASSERT_EQ(pipe2(from_child.data(), O_CLOEXEC), 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, to_child[0], STDIN_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, from_child[1], STDOUT_FILENO);
-  std::vector<std::string> arguments{kValveDecode};
-  auto argv = argv_of(arguments);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, kValveDecode, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  close(to_child[0]);
-  close(from_child[1]);
-
-  const std::string line = "(1700000000.000123) can0 18EFD8D5#04\n";
-  ASSERT_EQ(write(to_child[1], line.data(), line.size()), static_cast<ssize_t>(line.size()));
+  Subprocess valve_decode({kValveDecode}, Subprocess::Input::kPipe);
+  valve_decode.write_input("(1700000000.000123) can0 18EFD8D5#04\n");
   // Standard input stays open: the answer must come while valve-decode waits for more.
-  std::string received;
-  while (received.find('\n') == std::string::npos) {
-    pollfd readable{from_child[0], POLLIN, 0};
-    if (poll(&readable, 1, 10'000) != 1) break;
-    std::array<char, 512> buffer{};
-    const auto count = read(from_child[0], buffer.data(), buffer.size());
-    if (count <= 0) break;
-    received.append(buffer.data(), static_cast<std::size_t>(count));
-  }
-  close(to_child[1]);
-  close(from_child[0]);
-  EXPECT_EQ(wait_for_exit(pid), 0);
+  valve_decode.wait_for_stdout("\n", 10s);
+  const std::string received = valve_decode.out();
+  valve_decode.close_input();
+  const auto finished = valve_decode.wait(30s);
+  EXPECT_FALSE(finished.timed_out) << "valve-decode did not exit";
+  EXPECT_EQ(finished.exit_code, 0);
   EXPECT_EQ(received, R"({"t":1700000000.000123,"iface":"can0","dir":"to_valve","addr":216,)"
                       R"("msg":"clear_errors","fields":{}})"
                       "\n");
+  EXPECT_EQ(finished.out, received) << "nothing more at the end of the input";
 }
 
 TEST(ValveDecodeEndToEnd, HelpExplainsTheFormat) {

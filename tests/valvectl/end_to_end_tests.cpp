@@ -13,7 +13,8 @@
 
 #include "exit_codes.hpp"
 #include "fake_gateway.hpp"
-#include "subprocess.hpp"
+#include "support/eventually.hpp"
+#include "support/subprocess.hpp"
 #include "teejet/codec/codec.hpp"
 
 namespace teejet::testing {
@@ -309,7 +310,7 @@ TEST_F(ValvectlEndToEnd, WatchAsJsonPrintsOneArrayPerRefreshAndEndsWithExitZeroO
   Subprocess watching(
       {VALVECTL_PATH, "--domain", domain_text(), "--json", "watch", "--interval", "100"});
   // Refreshes go on while the gateway is being discovered; wait for one that shows the valves.
-  ASSERT_TRUE(watching.wait_for_output(codec::format_serial(kValveCount), 15s));
+  ASSERT_TRUE(watching.wait_for_stdout(codec::format_serial(kValveCount), 15s));
   watching.signal(SIGINT);
   const auto watched = watching.wait(15s);
   EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
@@ -321,7 +322,7 @@ TEST_F(ValvectlEndToEnd, WatchAsJsonPrintsOneArrayPerRefreshAndEndsWithExitZeroO
 
 TEST_F(ValvectlEndToEnd, WatchAsTextPrintsATablePerRefreshWithoutScreenControlIntoAPipe) {
   Subprocess watching({VALVECTL_PATH, "--domain", domain_text(), "watch", "--interval", "100"});
-  ASSERT_TRUE(watching.wait_for_output(codec::format_serial(kValveCount), 15s));
+  ASSERT_TRUE(watching.wait_for_stdout(codec::format_serial(kValveCount), 15s));
   watching.signal(SIGINT);
   const auto watched = watching.wait(15s);
   EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);

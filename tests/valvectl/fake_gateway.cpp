@@ -21,15 +21,6 @@ constexpr auto kTickPeriod = 50ms;
 
 }  // namespace
 
-bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds limit) {
-  const auto until = std::chrono::steady_clock::now() + limit;
-  while (std::chrono::steady_clock::now() < until) {
-    if (condition()) return true;
-    std::this_thread::sleep_for(10ms);
-  }
-  return condition();
-}
-
 FakeGateway::FakeGateway(const FakeGatewayOptions& options)
     : name_(options.name),
       bus_name_("valvectl-e2e-" + std::to_string(::getpid())),

@@ -6,7 +6,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -63,8 +62,5 @@ class FakeGateway {
   std::atomic<bool> stopping_{false};
   std::thread driver_;
 };
-
-// Polls `condition` until it holds or `limit` passes.
-bool eventually(const std::function<bool()>& condition, std::chrono::milliseconds limit);
 
 }  // namespace teejet::testing

@@ -8,43 +8,20 @@ tolerances). Usage: motion_physics.py VALVE_SIM
 """
 
 import os
-import signal
-import subprocess
 import sys
 import tempfile
 import time
 
-try:
-    import can
-except ImportError:
-    print("SKIP: python3-can is not installed for", sys.executable)
-    sys.exit(77)
+# sheet.py sits next to this script, whatever the working directory; no __pycache__ in the tree.
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.dont_write_bytecode = True
+from sheet import (check, finish, open_bus, print_log_on_failure, send,  # noqa: E402
+                   start_valve_sim, stop_valve_sim, tenths, u16)
 
-FAILURES = []
 # Telemetry comes every 0.1 s: the first report at the target lags the arrival by up to that.
 REACH_TOLERANCE_EARLY = 0.05
 REACH_TOLERANCE_LATE = 0.20
 RATE_TOLERANCE = 0.05  # relative, of the least-squares slope
-
-
-def check(condition, what):
-    print(("ok: " if condition else "FAIL: ") + what)
-    if not condition:
-        FAILURES.append(what)
-
-
-def to_valve(address):
-    return 0x18EF0000 | address << 8 | 0xD5
-
-
-def send(bus, address, payload):
-    bus.send(can.Message(arbitration_id=to_valve(address), data=bytes(payload),
-                         is_extended_id=True))
-
-
-def tenths(degrees):
-    value = round(degrees * 10)
-    return [value >> 8, value & 0xFF]
 
 
 def wait_for_valve(bus, address, seconds=10.0):
@@ -72,7 +49,7 @@ def track(bus, address, command, target, expected_seconds, wrap=False):
             continue
         if message.data[0] != 0x02:
             continue
-        degrees = (message.data[1] << 8 | message.data[2]) / 10.0
+        degrees = u16(message.data, 1) / 10.0
         samples.append((message.timestamp, degrees))
         if abs(degrees - target) < 0.05:
             reached_at = reached_at or message.timestamp
@@ -132,11 +109,8 @@ def main():
                   "  - serial: 2\n    opened: 360\n    dps: 120\n    start: 300\n")
     log_path = os.path.join(work, "sim.log")
     log = open(log_path, "w")
-    bus = can.interface.Bus(
-        channel="vcan0", interface="socketcan",
-        can_filters=[{"can_id": 0x18EFD500, "can_mask": 0x1FFFFF00, "extended": True}])
-    simulator = subprocess.Popen([valve_sim, "--can", "vcan0", "--config", config],
-                                 stdout=log, stderr=subprocess.STDOUT)
+    bus = open_bus()
+    simulator = start_valve_sim(valve_sim, ["--can", "vcan0", "--config", config], log)
     started = time.monotonic()
     try:
         check(wait_for_valve(bus, 0xD8) and wait_for_valve(bus, 0xD9), "both valves announced")
@@ -154,27 +128,15 @@ def main():
         judge("300->60 shortest, full turn", sent, samples, 300.0, 60.0, 120.0,
               unwrap=lambda d: (d - 300.0) % 360.0)
     finally:
-        if simulator.poll() is None:
-            simulator.send_signal(signal.SIGTERM)
-            try:
-                code = simulator.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                simulator.kill()
-                code = "killed"
-            check(code == 0, "SIGTERM: valve-sim exits 0 (got %s)" % code)
+        stop_valve_sim(simulator)
         bus.shutdown()
         log.close()
-        if FAILURES:
-            print("--- valve-sim log")
-            print(open(log_path).read())
+        print_log_on_failure(log_path)
         os.unlink(log_path)
         os.unlink(config)
         os.rmdir(work)
     print("bench time %.1f s" % (time.monotonic() - started))
-    if FAILURES:
-        print("%d check(s) failed" % len(FAILURES))
-        sys.exit(1)
-    print("all passed")
+    finish()
 
 
 if __name__ == "__main__":

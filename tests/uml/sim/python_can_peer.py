@@ -9,53 +9,23 @@ python3 (python3-can). Usage: python_can_peer.py VALVE_SIM
 
 import os
 import signal
-import subprocess
 import sys
 import tempfile
 import time
 
-try:
-    import can
-except ImportError:
-    print("SKIP: python3-can is not installed for", sys.executable)
-    sys.exit(77)
-
-CONTROLLER = 0xD5
-FAILURES = []
-
-
-def check(condition, what):
-    print(("ok: " if condition else "FAIL: ") + what)
-    if not condition:
-        FAILURES.append(what)
-
-
-def to_valve(address):  # 0x18EF<valve>D5
-    return 0x18EF0000 | address << 8 | CONTROLLER
-
-
-def u16(data, offset):
-    return data[offset] << 8 | data[offset + 1]
-
-
-def u24(data, offset):
-    return data[offset] << 16 | data[offset + 1] << 8 | data[offset + 2]
-
-
-def u32(data, offset):
-    return u24(data, offset) << 8 | data[offset + 3]
+# sheet.py sits next to this script, whatever the working directory; no __pycache__ in the tree.
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.dont_write_bytecode = True
+from sheet import (check, finish, open_bus, print_log_on_failure, send,  # noqa: E402
+                   start_valve_sim, stop_valve_sim, tenths, u16, u24, u32)
 
 
 class Peer:
     def __init__(self):
-        # Valve to controller only: 0x18EFD5xx.
-        self.bus = can.interface.Bus(
-            channel="vcan0", interface="socketcan",
-            can_filters=[{"can_id": 0x18EFD500, "can_mask": 0x1FFFFF00, "extended": True}])
+        self.bus = open_bus()
 
     def send(self, address, payload):
-        self.bus.send(can.Message(arbitration_id=to_valve(address), data=bytes(payload),
-                                  is_extended_id=True))
+        send(self.bus, address, payload)
 
     def frames(self, seconds):
         """Every valve frame for `seconds`: (address, data, timestamp)."""
@@ -91,30 +61,17 @@ def main():
     valve_sim = sys.argv[1]
     log = tempfile.NamedTemporaryFile(prefix="valve-sim-peer.", suffix=".log", delete=False)
     peer = Peer()
-    simulator = subprocess.Popen(
-        [valve_sim, "--can", "vcan0", "--serials", "123457,TJV123456", "--dps", "180"],
-        stdout=log, stderr=subprocess.STDOUT)
+    simulator = start_valve_sim(
+        valve_sim, ["--can", "vcan0", "--serials", "123457,TJV123456", "--dps", "180"], log)
     try:
         run(peer, simulator)
     finally:
-        if simulator.poll() is None:
-            simulator.send_signal(signal.SIGTERM)
-            try:
-                code = simulator.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                simulator.kill()
-                code = "killed"
-            check(code == 0, "SIGTERM: valve-sim exits 0 (got %s)" % code)
+        stop_valve_sim(simulator)
         peer.bus.shutdown()
         log.close()
-        if FAILURES:
-            print("--- valve-sim log")
-            print(open(log.name).read())
+        print_log_on_failure(log.name)
         os.unlink(log.name)
-    if FAILURES:
-        print("%d check(s) failed" % len(FAILURES))
-        sys.exit(1)
-    print("all passed")
+    finish()
 
 
 def run(peer, simulator):
@@ -131,12 +88,12 @@ def run(peer, simulator):
           "Version Information: application 1.00, boot loader 1.00 (%s)" % data)
 
     # Target Degrees 90.0 at 100 %, open: 0x02, speed, direction, degrees x 10 (MSB, LSB).
-    peer.send(0xD9, [0x02, 100, 1, 900 >> 8, 900 & 0xFF])
+    peer.send(0xD9, [0x02, 100, 1] + tenths(90.0))
     time.sleep(0.8)  # 90 degrees at 180 dps: 0.5 s
     data = peer.reply(0xD9, [0x11, 0], 0x02)
     check(data is not None and u16(data, 1) == 900, "position after the move: 90.0 degrees")
     # Degrees from Position: close by 45.0.
-    peer.send(0xD9, [0x03, 50, 0, 450 >> 8, 450 & 0xFF])
+    peer.send(0xD9, [0x03, 50, 0] + tenths(45.0))
     data = peer.reply(0xD9, [0x16, 0], 0x07)  # while it runs
     check(data is not None and list(data[1:4]) == [50, 0, 1],
           "speed 50 %%, closing, opening clockwise while running (%s)" % data)
