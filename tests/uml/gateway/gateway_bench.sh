@@ -9,7 +9,9 @@ repo=$2
 sim="$build/tools/valve-sim/valve-sim"
 gateway="$build/gateway/app/teejet-gateway"
 valvectl="$build/tools/valvectl/valvectl"
-export FASTDDS_DEFAULT_PROFILES_FILE="$repo/config/fastdds-loopback.xml"
+# Fast DDS 2.x reads the first name, later releases the second.
+export FASTRTPS_DEFAULT_PROFILES_FILE="$repo/config/fastdds-loopback.xml"
+export FASTDDS_DEFAULT_PROFILES_FILE="$FASTRTPS_DEFAULT_PROFILES_FILE"
 work=$(mktemp -d)
 pids=()
 cleanup() {

@@ -11,6 +11,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -22,6 +23,9 @@ struct ParticipantOptions {
   int domain = 0;
   std::string profile_file;  // Fast DDS XML profiles, loaded before any default QoS is read
   std::string name = "teejet";
+  // Called with a remote participant's GUID prefix ("01.0f.…") when its lease expired: the
+  // process died or became unreachable. A participant that leaves in order is not reported.
+  std::function<void(const std::string& guid_prefix)> on_participant_dropped;
 };
 
 class DdsError : public std::runtime_error {
@@ -56,6 +60,8 @@ class Participant {
   eprosima::fastdds::dds::Topic* topic(const std::string& name,
                                        eprosima::fastdds::dds::TypeSupport type);
 
+  class DiscoveryListener;
+  std::unique_ptr<DiscoveryListener> discovery_listener_;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
