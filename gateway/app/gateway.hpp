@@ -34,6 +34,7 @@ class Gateway {
   sim::Simulator* simulator() { return simulator_.get(); }
 
  private:
+  void commander_lost(const std::string& what, const std::string& commander);
   void read_bus();
   void keep_time();
 
@@ -43,6 +44,7 @@ class Gateway {
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<dds::GatewayPublisher> publisher_;
   std::unique_ptr<bridge::Bridge> bridge_;
+  std::atomic<bridge::Bridge*> live_bridge_{nullptr};  // for DDS callbacks
   std::unique_ptr<dds::CommandSubscription> commands_;
   std::atomic<bool> running_{false};
   std::thread reader_;

@@ -6,11 +6,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <map>
 
 #include "gateway.hpp"
 #include "support/eventually.hpp"
+#include "support/subprocess.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -381,6 +383,38 @@ TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
   EXPECT_NEAR(moved, 20.0, 1.0);
   const double untouched = position_of(left, 2);
   EXPECT_EQ(untouched, 0.0);
+}
+
+TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {
+  auto config = sim_config("gw-failsafe", 2);
+  config.sim_opened_degrees = 360;  // full-turn valves: a manual run never ends by itself
+  Gateway gateway(config);
+  start(gateway, 2);
+  const auto running = [&](std::uint32_t serial) {
+    auto* simulator = gateway.simulator();
+    return simulator->inspect([&](const sim::ValveBank& bank) {
+      return bank.valve_with_serial(serial)->running(simulator->clock()->now());
+    });
+  };
+  Ecu bystander;  // another ECU's manual run must survive the first one's death
+  auto manual = command(2, COMMAND_MANUAL);
+  manual.speed_percent(10);
+  const auto bystander_run = bystander.send(manual);
+  ASSERT_EQ(Ecu::states(bystander.follow(bystander_run, 1s)), std::vector{COMMAND_ACCEPTED});
+
+  // tests/dds/command_writer: writes Manual (open, 50 %) for serial 1, then waits to be killed.
+  teejet::testing::Subprocess commander(
+      {COMMAND_WRITER_PATH, std::to_string(domain_for_this_run()), "1"});
+  ASSERT_TRUE(commander.wait_for_stdout("sent", 20s));
+  ASSERT_TRUE(eventually([&] { return running(1); }, 5s)) << "the manual run never started";
+  commander.signal(SIGKILL);
+  const auto killed_at = std::chrono::steady_clock::now();
+
+  // Liveliness lease 2 s, then the gateway sends Stop.
+  ASSERT_TRUE(eventually([&] { return !running(1); }, 6s)) << "valve 1 still running";
+  const auto stopped_after = std::chrono::steady_clock::now() - killed_at;
+  EXPECT_GE(stopped_after, 1500ms);  // not before the lease could have run out
+  EXPECT_TRUE(running(2)) << "the fail-safe stopped a valve the dead commander never drove";
 }
 
 }  // namespace

@@ -460,7 +460,9 @@ std::size_t Bridge::stop_commanded_by(const std::string& commander, Timestamp no
   std::lock_guard lock(mutex_);
   std::size_t stopped = 0;
   for (auto& [serial, valve] : valves_) {
-    if (commander.empty() || valve.commander != commander) continue;
+    const bool drove_it =
+        valve.commander == commander || valve.commander.starts_with(commander + "|");
+    if (commander.empty() || !drove_it) continue;
     const auto record = directory_.find(serial);
     if (!record || !record->online || !send(record->address, codec::Stop{})) continue;
     ++stopped;

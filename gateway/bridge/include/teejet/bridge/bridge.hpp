@@ -81,7 +81,8 @@ class Bridge {
   // Sends Stop to every online valve; returns how many were sent. For shutdown.
   std::size_t stop_all(Timestamp now);
 
-  // Fail-safe: the commander's liveliness was lost; stop the valves it was driving.
+  // Fail-safe: a commander was lost; stop the valves it drove last. `commander` is a writer id
+  // ("prefix|entity"), or a participant's GUID prefix, which stands for all of its writers.
   std::size_t stop_commanded_by(const std::string& commander, Timestamp now);
 
   bool owns(std::uint32_t serial) const;
