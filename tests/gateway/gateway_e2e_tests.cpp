@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <map>
 
@@ -414,6 +415,9 @@ TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {
   ASSERT_TRUE(eventually([&] { return !running(1); }, 6s)) << "valve 1 still running";
   const auto stopped_after = std::chrono::steady_clock::now() - killed_at;
   EXPECT_GE(stopped_after, 1500ms);  // not before the lease could have run out
+  std::printf("fail-safe stopped the valve %lld ms after SIGKILL\n",
+              static_cast<long long>(
+                  std::chrono::duration_cast<std::chrono::milliseconds>(stopped_after).count()));
   EXPECT_TRUE(running(2)) << "the fail-safe stopped a valve the dead commander never drove";
 }
 
