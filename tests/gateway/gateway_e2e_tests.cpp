@@ -160,18 +160,31 @@ class GatewayE2E : public ::testing::Test {
   }
 };
 
-TEST_F(GatewayE2E, ALateJoinerSeesEveryValveAtOnce) {
-  Gateway gateway(sim_config("gw-late", 4));
-  start(gateway, 4);
+TEST_F(GatewayE2E, ALateJoinerSeesEveryValveOfAFullBusAtOnce) {
+  // 32 valves, every address of the bus: more than any per-topic instance default of a DDS
+  // implementation (Fast DDS: 10) must not matter.
+  Gateway gateway(sim_config("gw-late", 32));
+  start(gateway, 32);
   Ecu late;
   auto* presence = late.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
+  auto* position = late.state_reader<ValvePositionPubSubType>(dds::topics::kPosition);
   std::map<std::uint32_t, ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }, 15s));
-  for (std::uint32_t serial = 1; serial <= 4; ++serial) {
+  std::map<std::uint32_t, ValvePosition> positions;
+  ASSERT_TRUE(eventually(
+      [&] {
+        return latest_by_serial(presence, seen).size() == 32 &&
+               latest_by_serial(position, positions).size() == 32;
+      },
+      15s))
+      << seen.size() << " presences, " << positions.size() << " positions";
+  for (std::uint32_t serial = 1; serial <= 32; ++serial) {
     EXPECT_EQ(seen[serial].address(), 0xD8 + serial - 1);
     EXPECT_TRUE(seen[serial].online());
     EXPECT_EQ(seen[serial].gateway().to_string(), "gw-late");
   }
+  // And the 32nd valve takes commands like the first.
+  EXPECT_EQ(Ecu::states(late.follow(late.send(move_to(32, 20.0f)))),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {

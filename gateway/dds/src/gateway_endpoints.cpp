@@ -1,7 +1,9 @@
 #include "teejet/dds/gateway_endpoints.hpp"
 
 #include <fastdds/rtps/common/Guid.h>
+#include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <sstream>
 
@@ -19,12 +21,23 @@ DataWriter* state_writer(Participant& participant, const char* name) {
   return participant.writer(participant.topic<PubSubType>(name), topics::state_writer_qos());
 }
 
+// A failed write loses a sample that consumers expect: say so, without flooding the log.
+void report(DataWriter* writer, const ReturnCode_t& result) {
+  if (result == ReturnCode_t::RETCODE_OK) return;
+  static std::atomic<std::uint64_t> failures{0};
+  const auto count = ++failures;
+  if (count == 1 || count % 1000 == 0) {
+    spdlog::error("DDS write on {} failed (code {}); {} failed write(s) so far",
+                  writer->get_topic()->get_name(), result(), count);
+  }
+}
+
 // Samples carry the CAN receive time as their DDS source timestamp too.
 template <class Sample>
 void write_stamped(DataWriter* writer, Sample sample, std::uint64_t stamp_ns) {
   const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(stamp_ns / 1'000'000'000),
                                          static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
-  writer->write_w_timestamp(&sample, HANDLE_NIL, stamp);
+  report(writer, writer->write_w_timestamp(&sample, HANDLE_NIL, stamp));
 }
 
 }  // namespace
@@ -76,17 +89,19 @@ void GatewayPublisher::error_cleared(std::uint32_t serial, ErrorKind kind) {
   ValveError key;
   key.serial(serial);
   key.kind(kind);
-  error_->dispose(&key, HANDLE_NIL);
+  report(error_, error_->dispose(&key, HANDLE_NIL));
 }
 
 void GatewayPublisher::command_status(const CommandStatus& status) {
   CommandStatus copy = status;
-  command_status_->write(&copy);
+  report(command_status_,
+         command_status_->write(&copy) ? ReturnCode_t::RETCODE_OK : ReturnCode_t::RETCODE_ERROR);
 }
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {
   GatewayStatus copy = status;
-  gateway_status_->write(&copy);
+  report(gateway_status_,
+         gateway_status_->write(&copy) ? ReturnCode_t::RETCODE_OK : ReturnCode_t::RETCODE_ERROR);
 }
 
 std::string writer_id(const eprosima::fastrtps::rtps::InstanceHandle_t& handle) {

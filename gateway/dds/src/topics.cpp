@@ -11,6 +11,13 @@ namespace {
 
 const eprosima::fastrtps::Duration_t kCommandLease{2, 0};
 
+// Explicit bounds, so that memory is predictable. Fast DDS's default of 10 instances per topic
+// silently dropped the 11th valve of a bus (and would refuse commands for it); 4096 instances
+// cover 32 valves per bus on many gateways, and the six error kinds of each. (Fast DDS 2.9
+// spells "infinite" 0 here, and refuses every write with LENGTH_UNLIMITED.)
+constexpr std::int32_t kMaxInstances = 4096;
+constexpr std::int32_t kCommandsQueuedPerValve = 64;
+
 template <class Qos>
 Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, int depth) {
   Qos qos;
@@ -18,6 +25,11 @@ Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, i
   qos.durability().kind = durability;
   qos.history().kind = history;
   qos.history().depth = depth;
+  const std::int32_t per_instance =
+      history == KEEP_ALL_HISTORY_QOS ? kCommandsQueuedPerValve : depth;
+  qos.resource_limits().max_instances = kMaxInstances;
+  qos.resource_limits().max_samples_per_instance = per_instance;
+  qos.resource_limits().max_samples = kMaxInstances * per_instance;
   return qos;
 }
 

@@ -24,13 +24,15 @@ inline constexpr const char* kCommand = "teejet/valve/command";
 inline constexpr const char* kCommandStatus = "teejet/valve/command_status";
 inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
 
+// Every profile allows 4096 instances (valves, or valve and error kind) per topic.
+
 // State topics (presence, telemetry, errors, gateway status): RELIABLE, TRANSIENT_LOCAL,
 // KEEP_LAST 1 per instance. A late joiner gets the current value of every valve at once, and a
 // BEST_EFFORT or VOLATILE reader still matches.
 eprosima::fastdds::dds::DataWriterQos state_writer_qos();
 eprosima::fastdds::dds::DataReaderQos state_reader_qos();
 
-// Commands: RELIABLE, VOLATILE, KEEP_ALL, so no command is lost between writer and gateway;
+// Commands: RELIABLE, VOLATILE, KEEP_ALL (up to 64 queued per valve), so no command is lost;
 // automatic liveliness with a 2 s lease lets the gateway notice a vanished commander.
 eprosima::fastdds::dds::DataWriterQos command_writer_qos();
 eprosima::fastdds::dds::DataReaderQos command_reader_qos();
