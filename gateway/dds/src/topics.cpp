@@ -16,7 +16,7 @@ const eprosima::fastrtps::Duration_t kCommandLease{2, 0};
 // cover 32 valves per bus on many gateways, and the six error kinds of each. (Fast DDS 2.9
 // spells "infinite" 0 here, and refuses every write with LENGTH_UNLIMITED.)
 constexpr std::int32_t kMaxInstances = 4096;
-constexpr std::int32_t kCommandsQueuedPerValve = 64;
+constexpr std::int32_t kCommandsQueuedPerValve = 256;
 
 template <class Qos>
 Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, int depth) {
@@ -47,6 +47,10 @@ DataWriterQos command_writer_qos() {
   qos.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
   qos.liveliness().lease_duration = kCommandLease;
   qos.liveliness().announcement_period = eprosima::fastrtps::Duration_t{0, 500'000'000};
+  // A KEEP_ALL writer holds every command until the readers acknowledge it, and they do when
+  // the writer heartbeats: every 3 s by default, long enough to fill the history at a few
+  // dozen commands a second (measured: a fifth of them timed out in write()).
+  qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t{0, 100'000'000};
   return qos;
 }
 DataReaderQos command_reader_qos() {

@@ -32,7 +32,8 @@ inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
 eprosima::fastdds::dds::DataWriterQos state_writer_qos();
 eprosima::fastdds::dds::DataReaderQos state_reader_qos();
 
-// Commands: RELIABLE, VOLATILE, KEEP_ALL (up to 64 queued per valve), so no command is lost;
+// Commands: RELIABLE, VOLATILE, KEEP_ALL (up to 256 queued per valve, writers heartbeat every
+// 100 ms so acknowledgements free them promptly), so no command is lost;
 // automatic liveliness with a 2 s lease lets the gateway notice a vanished commander.
 eprosima::fastdds::dds::DataWriterQos command_writer_qos();
 eprosima::fastdds::dds::DataReaderQos command_reader_qos();
