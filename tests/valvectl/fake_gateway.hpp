@@ -1,33 +1,31 @@
 #pragma once
 
-// A gateway assembled in the test process from the project's own parts, the way teejet-gateway
-// assembles them: simulated valves on a VirtualBus, the Bridge, and the DDS endpoints, with the
-// commander fail-safe wired to the bridge. valvectl runs against it as a separate process.
+// The real gateway runtime (teejet::gateway::Gateway with simulated valves), plus what the
+// valvectl tests observe around it: the commands that reached it, seen through the command
+// statuses it publishes, and a valve that announces itself once and falls silent.
 
-#include <atomic>
-#include <chrono>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include "teejet/bridge/bridge.hpp"
+#include "gateway.hpp"
 #include "teejet/can/virtual_bus.hpp"
-#include "teejet/dds/gateway_endpoints.hpp"
-#include "teejet/sim/simulator.hpp"
+#include "teejet/dds/participant.hpp"
 
 namespace teejet::testing {
 
 struct FakeGatewayOptions {
   int domain = 0;
   std::string name = "fake-gateway";
-  std::vector<sim::ValveConfig> valves;
+  int valves = 1;  // TJV000001.., dps 90, closed 0, opened 90, 12.0 V, 25 °C
 };
 
-class FakeGateway {
+class FakeGateway : eprosima::fastdds::dds::DataReaderListener {
  public:
   explicit FakeGateway(const FakeGatewayOptions& options);  // throws when it cannot start
-  ~FakeGateway();
+  ~FakeGateway() override;
   FakeGateway(const FakeGateway&) = delete;
   FakeGateway& operator=(const FakeGateway&) = delete;
 
@@ -35,32 +33,27 @@ class FakeGateway {
   // gateway shows it online at once and offline after its offline timeout.
   void announce_silent_valve(std::uint32_t serial, std::uint8_t address);
 
-  bridge::Bridge& bridge() { return bridge_; }
-  sim::Simulator& simulator() { return simulator_; }
+  const bridge::Bridge& bridge() const { return gateway_.bridge(); }
+  sim::Simulator& simulator() { return *gateway_.simulator(); }
   const std::string& name() const { return name_; }
 
-  // Every command the gateway has handled, in order.
-  std::vector<ValveCommand> commands() const;
+  // The commands the gateway accepted or rejected, in order (one per command id). Commands for
+  // serials it does not know leave no status: bridge().counters().commands_ignored counts them.
+  std::vector<CommandStatus> commands() const;
   // A simulated valve's exact position now.
-  double position_of(std::uint32_t serial) const;
+  double position_of(std::uint32_t serial);
 
  private:
-  void drive();
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
 
   const std::string name_;
-  const std::string bus_name_;
-  can::VirtualBus bus_;         // the gateway's side: controller-side filters
-  can::VirtualBus silent_bus_;  // for valves that announce themselves and fall silent
-  sim::Simulator simulator_;
-  dds::Participant participant_;
-  dds::GatewayPublisher publisher_;
-  bridge::Bridge bridge_;
-  dds::CommandSubscription subscription_;
+  gateway::Gateway gateway_;
+  // On the simulator's bus, for valves that announce themselves and fall silent.
+  std::unique_ptr<can::VirtualBus> silent_bus_;
+  dds::Participant observer_;
 
   mutable std::mutex mutex_;
-  std::vector<ValveCommand> commands_;
-  std::atomic<bool> stopping_{false};
-  std::thread driver_;
+  std::vector<CommandStatus> commands_;
 };
 
 }  // namespace teejet::testing
