@@ -20,13 +20,6 @@ std::vector<ValveConfig> valves_with(std::initializer_list<std::uint32_t> serial
   return configs;
 }
 
-ValveConfig valve_with(std::uint32_t serial, double start = 0.0) {
-  ValveConfig config;
-  config.serial = serial;
-  config.start_degrees = start;
-  return config;
-}
-
 TEST(SimValveBank, RanksBySerialLowestFirstWhateverTheOrderGiven) {
   ValveBank bank;
   ASSERT_TRUE(bank.power_up(valves_with({300, 100, 200}), kT0));

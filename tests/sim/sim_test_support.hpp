@@ -37,6 +37,14 @@ inline double reported_position(SimulatedValve& valve, Timestamp now) {
   return only<codec::Position>(valve.handle(codec::RequestPosition{0}, now)).degrees;
 }
 
+// A default valve (limited, 0-90, 90 deg/s) with this serial, starting at `start` degrees.
+inline ValveConfig valve_with(std::uint32_t serial, double start = 0.0) {
+  ValveConfig config;
+  config.serial = serial;
+  config.start_degrees = start;
+  return config;
+}
+
 inline ValveConfig limited_valve(double start = 0.0) {
   ValveConfig config;
   config.serial = 123456;

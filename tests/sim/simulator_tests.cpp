@@ -123,20 +123,13 @@ class SimRuntime : public ::testing::Test {
   }
 };
 
-ValveConfig valve(std::uint32_t serial, double start = 0.0) {
-  ValveConfig config;
-  config.serial = serial;
-  config.start_degrees = start;
-  return config;
-}
-
 template <class T>
 bool is(const Received& received) {
   return std::holds_alternative<T>(received.message);
 }
 
 TEST_F(SimRuntime, ValvesAnnounceThemselvesAtTheirAddressesOnceASecond) {
-  start(options_for({valve(200), valve(100)}));
+  start(options_for({valve_with(200), valve_with(100)}));
   auto first = next();
   ASSERT_TRUE(first);
   EXPECT_EQ(first->address, 0xD8);
@@ -155,7 +148,7 @@ TEST_F(SimRuntime, ValvesAnnounceThemselvesAtTheirAddressesOnceASecond) {
 }
 
 TEST_F(SimRuntime, RequestsOverTheBusAreAnsweredFromTheRightAddress) {
-  start(options_for({valve(1, 12.3), valve(2, 45.6)}));
+  start(options_for({valve_with(1, 12.3), valve_with(2, 45.6)}));
   EXPECT_EQ(reply_of<codec::Position>(0xD9, codec::RequestPosition{0}), codec::Position{45.6});
   EXPECT_EQ(reply_of<codec::Position>(0xD8, codec::RequestPosition{0}), codec::Position{12.3});
   EXPECT_EQ(reply_of<codec::VersionInfo>(0xD8, codec::RequestVersion{}),
@@ -171,7 +164,7 @@ TEST_F(SimRuntime, RequestsOverTheBusAreAnsweredFromTheRightAddress) {
 }
 
 TEST_F(SimRuntime, ATargetMoveOverTheBusFollowsTheClock) {
-  start(options_for({valve(1)}));
+  start(options_for({valve_with(1)}));
   command(0xD8, codec::TargetDegrees{100, codec::TargetDirection::kOpen, 90.0});
   clock->advance(std::chrono::milliseconds(500));
   EXPECT_EQ(reply_of<codec::Position>(0xD8, codec::RequestPosition{0}), codec::Position{45.0});
@@ -185,7 +178,7 @@ TEST_F(SimRuntime, ATargetMoveOverTheBusFollowsTheClock) {
 }
 
 TEST_F(SimRuntime, AutomaticResendFollowsTheClockAndStopsOnZero) {
-  start(options_for({valve(1)}));
+  start(options_for({valve_with(1)}));
   command(0xD8, codec::Manual{100, codec::Direction::kOpen});
   EXPECT_EQ(reply_of<codec::Position>(0xD8, codec::RequestPosition{1}), codec::Position{0.0});
   for (int tenth = 1; tenth <= 5; ++tenth) {
@@ -200,9 +193,9 @@ TEST_F(SimRuntime, AutomaticResendFollowsTheClockAndStopsOnZero) {
 }
 
 TEST_F(SimRuntime, AValveAddedAtRunTimeReshufflesTheAddresses) {
-  start(options_for({valve(10, 10.0), valve(30, 30.0)}));
+  start(options_for({valve_with(10, 10.0), valve_with(30, 30.0)}));
   std::vector<AddressChange> changes;
-  ASSERT_TRUE(simulator->add_valve(valve(20, 20.0), &changes));
+  ASSERT_TRUE(simulator->add_valve(valve_with(20, 20.0), &changes));
   EXPECT_EQ(changes, (std::vector<AddressChange>{{20, std::nullopt, 0xD9}, {30, 0xD9, 0xDA}}));
   EXPECT_EQ(simulator->assignments(),
             (std::vector<Assignment>{{10, 0xD8}, {20, 0xD9}, {30, 0xDA}}));
@@ -221,7 +214,7 @@ TEST_F(SimRuntime, AValveAddedAtRunTimeReshufflesTheAddresses) {
 }
 
 TEST_F(SimRuntime, InjectedErrorsRepeatUntilClearErrorsOverTheBus) {
-  auto options = options_for({valve(1), valve(2)});
+  auto options = options_for({valve_with(1), valve_with(2)});
   options.errors.push_back({2, {ErrorKind::kLowVoltage, 9.5, 10.0}});
   start(std::move(options));
   auto seen = until([](const Received& r) { return is<codec::LowVoltageError>(r); });
@@ -245,7 +238,7 @@ TEST_F(SimRuntime, InjectedErrorsRepeatUntilClearErrorsOverTheBus) {
 }
 
 TEST_F(SimRuntime, FramesForOtherAddressesAndUndecodableFramesAreIgnored) {
-  start(options_for({valve(1)}));
+  start(options_for({valve_with(1)}));
   command(0xE0, codec::RequestVersion{});
   codec::CanFrame unknown{.id = codec::to_valve_id(0xD8), .dlc = 1};
   unknown.data[0] = 0x42;
@@ -261,7 +254,7 @@ TEST_F(SimRuntime, VerboseLogsEveryFrameDecoded) {
   auto logger = std::make_shared<spdlog::logger>(
       "sim-test", std::make_shared<spdlog::sinks::ostream_sink_mt>(log));
   logger->set_pattern("%v");
-  auto options = options_for({valve(1, 90.0)});
+  auto options = options_for({valve_with(1, 90.0)});
   options.verbose = true;
   options.logger = logger;
   start(std::move(options));
@@ -293,7 +286,7 @@ TEST(SimDescribeFrame, CandumpTextThenTheDecodedMessageOrWhyNot) {
 }
 
 TEST_F(SimRuntime, StartFailsVisiblyWhenTheBusCannotOpenOrTheBankIsBad) {
-  Simulator unnamed(std::make_unique<can::VirtualBus>(""), options_for({valve(1)}));
+  Simulator unnamed(std::make_unique<can::VirtualBus>(""), options_for({valve_with(1)}));
   const auto refused = unnamed.start();
   EXPECT_FALSE(refused);
   EXPECT_NE(refused.reason().find("cannot open"), std::string::npos) << refused.reason();
@@ -301,14 +294,14 @@ TEST_F(SimRuntime, StartFailsVisiblyWhenTheBusCannotOpenOrTheBankIsBad) {
 
   Simulator empty(std::make_unique<can::VirtualBus>(bus_name), options_for({}));
   EXPECT_FALSE(empty.start());
-  auto options = options_for({valve(1)});
+  auto options = options_for({valve_with(1)});
   options.errors.push_back({7, {ErrorKind::kLowVoltage, 9, 10}});
   Simulator wrong_serial(std::make_unique<can::VirtualBus>(bus_name), std::move(options));
   EXPECT_FALSE(wrong_serial.start());
 }
 
 TEST_F(SimRuntime, StopsPromptlyAndClosesTheBus) {
-  start(options_for({valve(1)}));
+  start(options_for({valve_with(1)}));
   const auto begin = std::chrono::steady_clock::now();
   simulator->stop();
   EXPECT_LT(std::chrono::steady_clock::now() - begin, std::chrono::seconds(1));
@@ -322,7 +315,7 @@ TEST(SimRuntimeRealTime, ResendsArriveOnTimeWithTheSystemClock) {
   can::VirtualBus controller(name, {.filters = can::controller_side_filters()});
   ASSERT_TRUE(controller.open());
   SimulatorOptions options;
-  options.valves = {valve(1)};
+  options.valves = {valve_with(1)};
   Simulator simulator(std::make_unique<can::VirtualBus>(
                           name, can::VirtualBusOptions{.filters = can::valve_side_filters()}),
                       options);
