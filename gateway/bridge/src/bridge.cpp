@@ -129,8 +129,7 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
     if (valve.motion && valve.motion->target_degrees &&
         dial_distance(position->degrees, *valve.motion->target_degrees) <=
             config_.completion_tolerance_degrees) {
-      finish(*valve.motion, COMMAND_COMPLETED, "", received);
-      valve.motion.reset();
+      end_motion(valve, COMMAND_COMPLETED, "", received);
     }
   } else if (const auto* dps = std::get_if<codec::DegreesPerSecond>(&message)) {
     valve.dps = dps->dps;
@@ -246,13 +245,10 @@ void Bridge::track(std::uint32_t serial, const codec::ToValveMessage& message,
   }
 
   // The valve works on the last command it received: whatever it was doing is replaced.
-  if (valve.motion) {
-    finish(*valve.motion, COMMAND_SUPERSEDED,
-           "replaced by command " + std::to_string(command.command_id()) +
-               (command.origin().size() == 0 ? "" : " from " + command.origin().to_string()),
-           now);
-    valve.motion.reset();
-  }
+  end_motion(valve, COMMAND_SUPERSEDED,
+             "replaced by command " + std::to_string(command.command_id()) +
+                 (command.origin().size() == 0 ? "" : " from " + command.origin().to_string()),
+             now);
   valve.commander = commander;
 
   const unsigned speed = speed_of(message);
@@ -377,10 +373,7 @@ void Bridge::tick(Timestamp now) {
   for (const auto& change : directory_.expire(now)) {
     publish_presence(change.valve);
     ValveState& valve = valves_[change.valve.serial];
-    if (valve.motion) {
-      finish(*valve.motion, COMMAND_TIMED_OUT, "valve went offline", now);
-      valve.motion.reset();
-    }
+    end_motion(valve, COMMAND_TIMED_OUT, "valve went offline", now);
     for (auto& request : valve.requests)
       finish(request, COMMAND_TIMED_OUT, "valve went offline", now);
     valve.requests.clear();
@@ -390,16 +383,16 @@ void Bridge::tick(Timestamp now) {
     if (valve.motion && valve.motion->deadline && now >= *valve.motion->deadline) {
       const TrackedCommand& motion = *valve.motion;
       if (motion.done_at_deadline) {
-        finish(motion, COMMAND_COMPLETED, "", now);
+        end_motion(valve, COMMAND_COMPLETED, "", now);
       } else if (motion.target_degrees) {
-        finish(motion, COMMAND_TIMED_OUT,
-               "position " + (valve.position ? format_degrees(*valve.position) : "unknown") +
-                   " did not reach " + format_degrees(*motion.target_degrees) + " in time",
-               now);
+        end_motion(valve, COMMAND_TIMED_OUT,
+                   "position " + (valve.position ? format_degrees(*valve.position) : "unknown") +
+                       " did not reach " + format_degrees(*motion.target_degrees) + " in time",
+                   now);
       } else {
-        finish(motion, COMMAND_TIMED_OUT, "position unknown: the move could not be confirmed", now);
+        end_motion(valve, COMMAND_TIMED_OUT, "position unknown: the move could not be confirmed",
+                   now);
       }
-      valve.motion.reset();
     }
     std::erase_if(valve.requests, [&](TrackedCommand& request) {
       if (now < *request.deadline) return false;
@@ -441,17 +434,25 @@ void Bridge::publish_gateway_status(Timestamp now) {
 
 // ---- Safe state ---------------------------------------------------------------------------
 
+void Bridge::end_motion(ValveState& valve, CommandState state, const std::string& reason,
+                        Timestamp now) {
+  if (!valve.motion) return;
+  finish(*valve.motion, state, reason, now);
+  valve.motion.reset();
+}
+
+bool Bridge::stop_valve(std::uint32_t serial, const std::string& reason, Timestamp now) {
+  const auto record = directory_.find(serial);
+  if (!record || !record->online || !send(record->address, codec::Stop{})) return false;
+  end_motion(valves_[serial], COMMAND_SUPERSEDED, reason, now);
+  return true;
+}
+
 std::size_t Bridge::stop_all(Timestamp now) {
   std::lock_guard lock(mutex_);
   std::size_t stopped = 0;
   for (const auto& record : directory_.valves()) {
-    if (!record.online || !send(record.address, codec::Stop{})) continue;
-    ++stopped;
-    ValveState& valve = valves_[record.serial];
-    if (valve.motion) {
-      finish(*valve.motion, COMMAND_SUPERSEDED, "gateway stopped the valve", now);
-      valve.motion.reset();
-    }
+    if (stop_valve(record.serial, "gateway stopped the valve", now)) ++stopped;
   }
   return stopped;
 }
@@ -463,13 +464,8 @@ std::size_t Bridge::stop_commanded_by(const std::string& commander, Timestamp no
     const bool drove_it =
         valve.commander == commander || valve.commander.starts_with(commander + "|");
     if (commander.empty() || !drove_it) continue;
-    const auto record = directory_.find(serial);
-    if (!record || !record->online || !send(record->address, codec::Stop{})) continue;
+    if (!stop_valve(serial, "fail-safe: the commanding writer was lost", now)) continue;
     ++stopped;
-    if (valve.motion) {
-      finish(*valve.motion, COMMAND_SUPERSEDED, "fail-safe: the commanding writer was lost", now);
-      valve.motion.reset();
-    }
     valve.commander.clear();
   }
   return stopped;

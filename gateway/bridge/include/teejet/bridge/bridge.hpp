@@ -122,6 +122,10 @@ class Bridge {
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp now);
   void reject(const ValveCommand& command, const std::string& reason, Timestamp now);
+  // Ends the valve's running command, if any, with a final state.
+  void end_motion(ValveState& valve, CommandState state, const std::string& reason, Timestamp now);
+  // Sends Stop to an online valve and supersedes its running command; false if not sent.
+  bool stop_valve(std::uint32_t serial, const std::string& reason, Timestamp now);
   void finish(const TrackedCommand& tracked, CommandState state, const std::string& reason,
               Timestamp now);
   void track(std::uint32_t serial, const codec::ToValveMessage& message,
