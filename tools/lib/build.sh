@@ -3,9 +3,12 @@
 # docker/Dockerfile. Sourcing it cds to the repository root and sets:
 #   REPO_ROOT  absolute path of the repository
 #   BUILD_DIR  build directory (env BUILD_DIR, default "build", relative to REPO_ROOT)
+#   PRESET     CMakePresets.json configure preset (env PRESET, default "ci": Release with
+#              warnings as errors; "dev" for RelWithDebInfo, "release" for a consumer's build)
 
 REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 BUILD_DIR="${BUILD_DIR:-build}"
+PRESET="${PRESET:-ci}"
 cd "$REPO_ROOT" || return 1
 
 tj_install_deps() {
@@ -13,7 +16,7 @@ tj_install_deps() {
 }
 
 tj_configure() {
-  cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo
+  cmake --preset "$PRESET" -B "$BUILD_DIR"
 }
 
 tj_build() {
