@@ -55,15 +55,22 @@ stop_started() {
   for pid in "${started[@]}"; do stop_process "$pid"; done
   started=()
 }
-# SIGTERM (the gateway then stops its valves and leaves DDS), SIGKILL if it hangs.
-stop_process() {
-  local pid=$1 _
-  kill -TERM "$pid" 2>/dev/null || return 0
-  for _ in $(seq 50); do
-    kill -0 "$pid" 2>/dev/null || break
+# eventually SECONDS COMMAND...: polls COMMAND until it succeeds; false when SECONDS pass first.
+eventually() {
+  local deadline=$((SECONDS + $1))
+  shift
+  until "$@"; do
+    [ "$SECONDS" -ge "$deadline" ] && return 1
     sleep 0.1
   done
-  kill -KILL "$pid" 2>/dev/null
+}
+# shellcheck disable=SC2317 # invoked via eventually
+gone() { ! kill -0 "$1" 2>/dev/null; }
+# SIGTERM (the gateway then stops its valves and leaves DDS), SIGKILL if it hangs.
+stop_process() {
+  local pid=$1
+  kill -TERM "$pid" 2>/dev/null || return 0
+  eventually 5 gone "$pid" || kill -KILL "$pid" 2>/dev/null
   wait "$pid" 2>/dev/null
   return 0
 }
@@ -152,8 +159,6 @@ done
 out=$(mktemp -d "${TMPDIR:-/tmp}/gateway-bench-out.XXXXXX") || exit 1
 trap 'rm -rf "$out"' EXIT
 
-# Per run: six latency series of ~15 ms per sample (allowing twice that), three footprint
-# windows, discovery and boot.
 # Boot, six latency series (up to ~40 ms a sample under load) and four footprint windows.
 uml_timeout=$((180 + 6 * (samples + 100) * 40 / 1000 + 4 * (settle_s + window_s)))
 failed=0

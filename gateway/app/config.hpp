@@ -9,11 +9,14 @@
 #include <string>
 
 #include "teejet/bridge/bridge.hpp"
-#include "teejet/codec/result.hpp"
+#include "teejet/core/result.hpp"
 
 namespace teejet::gateway {
 
 enum class OnCommanderLost { kStopItsValves, kIgnore };
+
+// The highest DDS domain id (the RTPS port formula's limit with the default port parameters).
+inline constexpr int kMaxDomain = 232;
 
 struct GatewayConfig {
   std::string can = "";  // SocketCAN interface, "virtual:NAME", or "sim:N"
@@ -29,14 +32,12 @@ struct GatewayConfig {
   bridge::BridgeConfig bridge;
 };
 
-// Reads a YAML file over `base`. Unknown keys are errors, so a typo never silently does nothing.
-codec::Result<GatewayConfig> load_config_file(const std::string& path, GatewayConfig base);
+// Reads a YAML file over `base`. Unknown keys, keys given twice and values outside their range
+// are errors naming the file, line and key, so a typo never silently does nothing.
+Result<GatewayConfig> load_config_file(const std::string& path, GatewayConfig base);
 
 // Same, from text (for tests and error messages naming the source).
-codec::Result<GatewayConfig> parse_config(const std::string& yaml, const std::string& source,
-                                          GatewayConfig base);
-
-// How many simulated valves "sim:N" asks for, or nullopt if `can` is not of that form.
-codec::Result<std::optional<int>> simulated_valve_count(const std::string& can);
+Result<GatewayConfig> parse_config(const std::string& yaml, const std::string& source,
+                                   GatewayConfig base);
 
 }  // namespace teejet::gateway

@@ -1,54 +1,66 @@
 #pragma once
 
-// The running gateway: a CAN bus (SocketCAN, virtual, or a virtual bus with embedded simulated
-// valves), the bridge, and the DDS endpoints, with one thread reading the bus and one keeping
-// time. DDS callbacks arrive on Fast DDS's own threads.
+// The running gateway: its bus (and the simulated valves of sim:N), the bridge, and the DDS
+// endpoints, with two threads of its own: one reads the bus, one takes commands. Both keep the
+// bridge's deadlines, waiting exactly until the next one. Fast DDS's threads only queue news of
+// lost commanders.
 
-#include <atomic>
 #include <memory>
 #include <thread>
 
+#include "bus_backend.hpp"
 #include "config.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/bus.hpp"
-#include "teejet/dds/gateway_endpoints.hpp"
+#include "teejet/dds/command_subscription.hpp"
+#include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace teejet::gateway {
 
 class Gateway {
  public:
-  explicit Gateway(GatewayConfig config);
+  // Runs on `backend`: its bus, and its simulator when there is one.
+  Gateway(GatewayConfig config, BusBackend backend,
+          std::shared_ptr<const Clock> clock = system_clock());
   ~Gateway();  // stop()
   Gateway(const Gateway&) = delete;
   Gateway& operator=(const Gateway&) = delete;
 
-  // Opens the bus (and starts the simulator for sim:N), joins DDS and starts the threads.
-  // Fails, saying why, without leaving anything running.
-  can::Status start();
+  // Starts the simulator, opens the bus, joins DDS and starts the threads. Fails, saying why,
+  // without leaving anything running.
+  Status start();
 
-  // Stops the threads, stops every valve if configured, leaves DDS. Idempotent.
+  // In this order: stops taking commands (the command reader is deleted), sends Stop to every
+  // online valve if configured, stops reading the bus, leaves DDS, closes the bus, stops the
+  // simulator. Idempotent.
   void stop();
 
   const bridge::Bridge& bridge() const { return *bridge_; }
-  sim::Simulator* simulator() { return simulator_.get(); }
+  sim::Simulator* simulator() { return backend_.simulator.get(); }
 
  private:
-  void commander_lost(const std::string& what, const std::string& commander);
-  void read_bus();
-  void keep_time();
+  void read_bus(std::stop_token stop);
+  void take_commands(std::stop_token stop);
+  void commander_lost(const std::string& commander);
+  void log_changes();
+  Duration until_next_deadline() const;
 
   GatewayConfig config_;
-  std::unique_ptr<sim::Simulator> simulator_;
-  std::unique_ptr<can::Bus> bus_;
+  BusBackend backend_;
+  const std::shared_ptr<const Clock> clock_;
+  std::shared_ptr<dds::LostCommanders> lost_commanders_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<dds::GatewayPublisher> publisher_;
   std::unique_ptr<bridge::Bridge> bridge_;
-  std::atomic<bridge::Bridge*> live_bridge_{nullptr};  // for DDS callbacks
   std::unique_ptr<dds::CommandSubscription> commands_;
-  std::atomic<bool> running_{false};
-  std::thread reader_;
-  std::thread clock_;
+  std::jthread reader_;
+  std::jthread commander_;
+
+  // What log_changes() said last; reader thread only.
+  can::BusState logged_state_ = can::BusState::kErrorActive;
+  std::uint64_t logged_decode_errors_ = 0;
+  SteadyTime next_decode_report_{};
 };
 
 }  // namespace teejet::gateway

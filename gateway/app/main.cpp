@@ -74,9 +74,14 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  teejet::gateway::Gateway gateway(config);
+  auto backend = teejet::gateway::make_bus_backend(config);
+  if (!backend) {
+    spdlog::error("{}", backend.error().reason);
+    return 2;
+  }
+  teejet::gateway::Gateway gateway(config, std::move(*backend));
   if (auto started = gateway.start(); !started) {
-    spdlog::error("cannot start: {}", started.reason());
+    spdlog::error("cannot start: {}", started.error().reason);
     return 1;
   }
   int signal = 0;

@@ -11,17 +11,17 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr Timestamp kStart = 1'700'000'000s;
+constexpr Timestamp kStart{1'700'000'000s};
 
 struct RecordingSink : Sink {
   std::vector<ValvePresence> presences;
-  std::vector<TelemetrySample> samples;
+  std::vector<dds::TelemetrySample> samples;
   std::vector<std::pair<std::uint32_t, ErrorKind>> cleared;
   std::vector<CommandStatus> statuses;
   std::vector<GatewayStatus> gateway;
 
   void presence(const ValvePresence& s) override { presences.push_back(s); }
-  void telemetry(const TelemetrySample& s) override { samples.push_back(s); }
+  void telemetry(const dds::TelemetrySample& s) override { samples.push_back(s); }
   void error_cleared(std::uint32_t serial, ErrorKind kind) override {
     cleared.emplace_back(serial, kind);
   }
@@ -64,8 +64,35 @@ class BridgeTest : public ::testing::Test {
     return {codec::encode(address, message).value(), at};
   }
 
-  void announce(Bridge& bridge, std::uint8_t address, std::uint32_t serial, Timestamp at) {
-    bridge.on_frame(from_valve(address, codec::IAmHere{0x000123, serial, false}, at));
+  void announce(Bridge& bridge, std::uint8_t address, std::uint32_t serial, Timestamp when) {
+    deliver(bridge, from_valve(address, codec::IAmHere{0x000123, serial, false}, when));
+  }
+
+  // Time passes to `when` (the wall and steady clocks together) before each call to the bridge.
+  void at(Timestamp when) {
+    ASSERT_GE(when, clock->wall()) << "a test must not go back in time";
+    clock->advance(when - clock->wall());
+  }
+  void deliver(Bridge& bridge, const can::TimedFrame& frame) {
+    at(frame.received);
+    bridge.on_frame(frame);
+  }
+  void tick_at(Bridge& bridge, Timestamp when) {
+    at(when);
+    bridge.tick();
+  }
+  void command_at(Bridge& bridge, Timestamp when, const ValveCommand& c,
+                  const std::string& commander = {}) {
+    at(when);
+    bridge.on_command(c, commander);
+  }
+  std::size_t stop_all_at(Bridge& bridge, Timestamp when) {
+    at(when);
+    return bridge.stop_all();
+  }
+  std::size_t stop_commanded_by_at(Bridge& bridge, Timestamp when, const std::string& commander) {
+    at(when);
+    return bridge.stop_commanded_by(commander);
   }
 
   static ValveCommand command(std::uint32_t serial, std::uint32_t id, CommandKind kind) {
@@ -89,10 +116,11 @@ class BridgeTest : public ::testing::Test {
   can::VirtualBus gateway_bus{bus_name, {.filters = can::controller_side_filters()}};
   can::VirtualBus valve_side{bus_name, {.filters = can::valve_side_filters()}};
   RecordingSink sink;
+  std::shared_ptr<ManualClock> clock = std::make_shared<ManualClock>(kStart);
 };
 
 TEST_F(BridgeTest, IAmHerePublishesPresenceAndArmsThePollSchedule) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 123456, kStart);
 
   ASSERT_EQ(sink.presences.size(), 1u);
@@ -101,7 +129,7 @@ TEST_F(BridgeTest, IAmHerePublishesPresenceAndArmsThePollSchedule) {
   EXPECT_EQ(presence.address(), 0xD8);
   EXPECT_TRUE(presence.online());
   EXPECT_EQ(presence.part_number(), 0x000123u);
-  EXPECT_EQ(presence.last_seen_ns(), static_cast<std::uint64_t>(kStart.count()));
+  EXPECT_EQ(presence.last_seen_ns(), unix_nanoseconds(kStart));
   EXPECT_EQ(presence.gateway().to_string(), "gw-test");
 
   const auto frames = sent();
@@ -117,48 +145,48 @@ TEST_F(BridgeTest, IAmHerePublishesPresenceAndArmsThePollSchedule) {
 }
 
 TEST_F(BridgeTest, HeartbeatsRefreshPresenceWithoutPollingAgain) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
   announce(bridge, 0xD8, 1, kStart + 1s);
   EXPECT_TRUE(sent().empty());
   ASSERT_EQ(sink.presences.size(), 2u);
-  EXPECT_EQ(sink.presences[1].last_seen_ns(), static_cast<std::uint64_t>((kStart + 1s).count()));
+  EXPECT_EQ(sink.presences[1].last_seen_ns(), unix_nanoseconds(kStart + 1s));
 }
 
 TEST_F(BridgeTest, TelemetryIsPublishedForTheSerialStampedWithReceiveTime) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD9, 4711, kStart);
-  bridge.on_frame(from_valve(0xD9, codec::Position{123.4}, kStart + 5ms));
+  deliver(bridge, from_valve(0xD9, codec::Position{123.4}, kStart + 5ms));
   ASSERT_EQ(sink.samples.size(), 1u);
   const auto& position = std::get<ValvePosition>(sink.samples[0]);
   EXPECT_EQ(position.serial(), 4711u);
   EXPECT_FLOAT_EQ(position.degrees(), 123.4f);
-  EXPECT_EQ(position.received_ns(), static_cast<std::uint64_t>((kStart + 5ms).count()));
+  EXPECT_EQ(position.received_ns(), unix_nanoseconds(kStart + 5ms));
 }
 
 TEST_F(BridgeTest, TelemetryFromAnUnannouncedAddressIsCountedNotGuessed) {
-  Bridge bridge(config(), gateway_bus, sink);
-  bridge.on_frame(from_valve(0xE0, codec::Position{10.0}, kStart));
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  deliver(bridge, from_valve(0xE0, codec::Position{10.0}, kStart));
   EXPECT_TRUE(sink.samples.empty());
   EXPECT_EQ(bridge.counters().unattributed, 1u);
 }
 
 TEST_F(BridgeTest, MalformedFramesAreCountedAndReportedInGatewayStatus) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   codec::CanFrame short_position{.id = 0x18EFD5D8, .dlc = 2, .data = {0x02, 0x01}};
-  bridge.on_frame({short_position, kStart});
+  deliver(bridge, {short_position, kStart});
   EXPECT_EQ(bridge.counters().decode_errors, 1u);
   EXPECT_EQ(bridge.counters().last_decode_error, "position needs 3 bytes, got 2");
-  bridge.tick(kStart);
-  bridge.tick(kStart + 1s);
+  tick_at(bridge, kStart);
+  tick_at(bridge, kStart + 1s);
   ASSERT_EQ(sink.gateway.size(), 1u);
   EXPECT_EQ(sink.gateway[0].decode_errors(), 1u);
   EXPECT_EQ(sink.gateway[0].gateway().to_string(), "gw-test");
 }
 
 TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 500, kStart);
   (void)sent();
   announce(bridge, 0xDA, 500, kStart + 1s);  // a valve with a lower serial joined
@@ -167,10 +195,10 @@ TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
   ASSERT_EQ(repoll.size(), 9u);
   EXPECT_EQ(repoll[0].id, 0x18EFDAD5u);
 
-  bridge.on_frame(from_valve(0xDA, codec::Position{45.0}, kStart + 1100ms));
+  deliver(bridge, from_valve(0xDA, codec::Position{45.0}, kStart + 1100ms));
   EXPECT_EQ(std::get<ValvePosition>(sink.samples.back()).serial(), 500u);
 
-  bridge.on_command(command(500, 1, COMMAND_STOP), kStart + 2s);
+  command_at(bridge, kStart + 2s, command(500, 1, COMMAND_STOP));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].id, 0x18EFDAD5u);
@@ -178,16 +206,16 @@ TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
 }
 
 TEST_F(BridgeTest, OfflineAfterThreeSecondsWithoutIAmHere) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 9, kStart);
-  bridge.tick(kStart + 3s);
+  tick_at(bridge, kStart + 3s);
   EXPECT_TRUE(sink.presences.back().online());
-  bridge.tick(kStart + 3s + 1ms);
+  tick_at(bridge, kStart + 3s + 1ms);
   EXPECT_FALSE(sink.presences.back().online());
   EXPECT_EQ(sink.presences.back().serial(), 9u);
 
   (void)sent();
-  bridge.on_command(command(9, 7, COMMAND_STOP), kStart + 4s);
+  command_at(bridge, kStart + 4s, command(9, 7, COMMAND_STOP));
   EXPECT_EQ(sink.states_of(7), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "valve TJV000009 is offline");
   EXPECT_TRUE(sent().empty());
@@ -198,8 +226,8 @@ TEST_F(BridgeTest, OfflineAfterThreeSecondsWithoutIAmHere) {
 }
 
 TEST_F(BridgeTest, CommandsForSerialsThisGatewayDoesNotHaveAreIgnoredSilently) {
-  Bridge bridge(config(), gateway_bus, sink);
-  bridge.on_command(command(999, 1, COMMAND_STOP), kStart);
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  command_at(bridge, kStart, command(999, 1, COMMAND_STOP));
   EXPECT_TRUE(sink.statuses.empty());
   EXPECT_TRUE(sent().empty());
   EXPECT_EQ(bridge.counters().commands_ignored, 1u);
@@ -207,19 +235,19 @@ TEST_F(BridgeTest, CommandsForSerialsThisGatewayDoesNotHaveAreIgnoredSilently) {
 }
 
 TEST_F(BridgeTest, OutOfRangeCommandIsRejectedWithReasonAndNeverReachesTheBus) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
-  bridge.on_command(target(1, 3, 360.0f), kStart);
+  command_at(bridge, kStart, target(1, 3, 360.0f));
   EXPECT_EQ(sink.states_of(3), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "target_degrees: degrees 360 is outside 0 to 359.9");
   auto fast = command(1, 4, COMMAND_MANUAL);
   fast.speed_percent(101);
-  bridge.on_command(fast, kStart);
+  command_at(bridge, kStart, fast);
   EXPECT_EQ(sink.last_reason(), "manual: speed_percent 101 is outside 0 to 100");
   auto shortest = command(1, 5, COMMAND_DEGREES_FROM_POSITION);
   shortest.direction(DIRECTION_SHORTEST);
-  bridge.on_command(shortest, kStart);
+  command_at(bridge, kStart, shortest);
   EXPECT_EQ(sink.last_reason(),
             "degrees_from_position: direction SHORTEST exists only for Target Degrees");
   EXPECT_TRUE(sent().empty());
@@ -227,37 +255,37 @@ TEST_F(BridgeTest, OutOfRangeCommandIsRejectedWithReasonAndNeverReachesTheBus) {
 }
 
 TEST_F(BridgeTest, TargetMoveIsSentThenCompletedFromPositionTelemetry) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
   (void)sent();
 
-  bridge.on_command(target(1, 10, 90.0f), kStart + 10ms);
+  command_at(bridge, kStart + 10ms, target(1, 10, 90.0f));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   const std::array<std::uint8_t, 8> expected{0x02, 100, 0x01, 0x03, 0x84, 0xFF, 0xFF, 0xFF};
   EXPECT_EQ(frames[0].data, expected);
   EXPECT_EQ(sink.states_of(10), std::vector{COMMAND_ACCEPTED});
 
-  bridge.on_frame(from_valve(0xD8, codec::Position{45.0}, kStart + 500ms));
+  deliver(bridge, from_valve(0xD8, codec::Position{45.0}, kStart + 500ms));
   EXPECT_EQ(sink.states_of(10), std::vector{COMMAND_ACCEPTED});
-  bridge.on_frame(from_valve(0xD8, codec::Position{89.5}, kStart + 1000ms));  // within 1.0
+  deliver(bridge, from_valve(0xD8, codec::Position{89.5}, kStart + 1000ms));  // within 1.0
   EXPECT_EQ(sink.states_of(10), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
-  EXPECT_EQ(sink.statuses.back().stamp_ns(), static_cast<std::uint64_t>((kStart + 1s).count()));
+  EXPECT_EQ(sink.statuses.back().stamp_ns(), unix_nanoseconds(kStart + 1s));
 }
 
 TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
-  bridge.on_frame(from_valve(0xD8, codec::DegreesPerSecond{90, codec::Direction::kOpen}, kStart));
-  bridge.on_command(target(1, 11, 90.0f), kStart);  // ETA 1 s at 90 dps, plus a 3 s margin
-  bridge.on_frame(from_valve(0xD8, codec::Position{30.0}, kStart + 1s));
+  deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::DegreesPerSecond{90, codec::Direction::kOpen}, kStart));
+  command_at(bridge, kStart, target(1, 11, 90.0f));  // ETA 1 s at 90 dps, plus a 3 s margin
+  deliver(bridge, from_valve(0xD8, codec::Position{30.0}, kStart + 1s));
   announce(bridge, 0xD8, 1, kStart + 2s);
   announce(bridge, 0xD8, 1, kStart + 3s);
-  bridge.tick(kStart + 3999ms);
+  tick_at(bridge, kStart + 3999ms);
   EXPECT_EQ(sink.states_of(11), std::vector{COMMAND_ACCEPTED});
-  bridge.tick(kStart + 4s);
+  tick_at(bridge, kStart + 4s);
   EXPECT_EQ(sink.states_of(11), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
   EXPECT_EQ(sink.states_of(11).size(), 2u);
   const auto& last = sink.statuses.back();
@@ -265,11 +293,11 @@ TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
 }
 
 TEST_F(BridgeTest, ANewCommandSupersedesTheRunningOne) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{0.0}, kStart));
-  bridge.on_command(target(1, 20, 90.0f), kStart);
-  bridge.on_command(target(1, 21, 10.0f), kStart + 100ms);
+  deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
+  command_at(bridge, kStart, target(1, 20, 90.0f));
+  command_at(bridge, kStart + 100ms, target(1, 21, 10.0f));
   EXPECT_EQ(sink.states_of(20), (std::vector{COMMAND_ACCEPTED, COMMAND_SUPERSEDED}));
   EXPECT_EQ(sink.states_of(21), std::vector{COMMAND_ACCEPTED});
   const auto superseded = std::find_if(sink.statuses.begin(), sink.statuses.end(),
@@ -280,60 +308,60 @@ TEST_F(BridgeTest, ANewCommandSupersedesTheRunningOne) {
 TEST_F(BridgeTest, DegreesFromPositionCompletesAtTheRelativeTarget) {
   auto c = config();
   c.default_limits = ValveLimits{0.0, 90.0};
-  Bridge bridge(c, gateway_bus, sink);
+  Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{80.0}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::Position{80.0}, kStart));
   auto relative = command(1, 30, COMMAND_DEGREES_FROM_POSITION);
   relative.degrees(45.0f);  // 125 clamps to the opened limit, 90
-  bridge.on_command(relative, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{90.0}, kStart + 200ms));
+  command_at(bridge, kStart, relative);
+  deliver(bridge, from_valve(0xD8, codec::Position{90.0}, kStart + 200ms));
   EXPECT_EQ(sink.states_of(30), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(BridgeTest, FullTurnValveWrapsRelativeTargets) {
   auto c = config();
   c.limits[1] = ValveLimits{0.0, 360.0};
-  Bridge bridge(c, gateway_bus, sink);
+  Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{350.0}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::Position{350.0}, kStart));
   auto relative = command(1, 31, COMMAND_DEGREES_FROM_POSITION);
   relative.degrees(20.0f);  // 370 wraps to 10
-  bridge.on_command(relative, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::Position{9.6}, kStart + 300ms));
+  command_at(bridge, kStart, relative);
+  deliver(bridge, from_valve(0xD8, codec::Position{9.6}, kStart + 300ms));
   EXPECT_EQ(sink.states_of(31), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(BridgeTest, MillisecondsToRunCompletesWhenItsTimeIsUp) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   auto jog = command(1, 40, COMMAND_MILLISECONDS_TO_RUN);
   jog.milliseconds(1500);
-  bridge.on_command(jog, kStart);
-  bridge.tick(kStart + 1499ms);
+  command_at(bridge, kStart, jog);
+  tick_at(bridge, kStart + 1499ms);
   EXPECT_EQ(sink.states_of(40), std::vector{COMMAND_ACCEPTED});
-  bridge.tick(kStart + 1500ms);
+  tick_at(bridge, kStart + 1500ms);
   EXPECT_EQ(sink.states_of(40), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(BridgeTest, StopAndClearErrorsCompleteOnceSent) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_command(command(1, 50, COMMAND_STOP), kStart);
+  command_at(bridge, kStart, command(1, 50, COMMAND_STOP));
   EXPECT_EQ(sink.states_of(50), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(BridgeTest, ErrorsAreLatchedUntilClearErrors) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  bridge.on_frame(from_valve(0xD8, codec::HighVoltageError{17.2, 16.5}, kStart));
-  bridge.on_frame(from_valve(0xD8, codec::HighTemperatureError{90, 85}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::HighVoltageError{17.2, 16.5}, kStart));
+  deliver(bridge, from_valve(0xD8, codec::HighTemperatureError{90, 85}, kStart));
   const auto& error = std::get<ValveError>(sink.samples.at(0));
   EXPECT_EQ(error.kind(), ERROR_HIGH_VOLTAGE);
   EXPECT_FLOAT_EQ(error.value(), 17.2f);
   EXPECT_TRUE(sink.cleared.empty());
 
   (void)sent();
-  bridge.on_command(command(1, 60, COMMAND_CLEAR_ERRORS), kStart + 1s);
+  command_at(bridge, kStart + 1s, command(1, 60, COMMAND_CLEAR_ERRORS));
   EXPECT_EQ(sent().at(0).data[0], 0x04);
   const std::vector<std::pair<std::uint32_t, ErrorKind>> cleared{{1, ERROR_HIGH_VOLTAGE},
                                                                  {1, ERROR_HIGH_TEMPERATURE}};
@@ -341,20 +369,20 @@ TEST_F(BridgeTest, ErrorsAreLatchedUntilClearErrors) {
 }
 
 TEST_F(BridgeTest, RequestCompletesWhenTheReplyArrivesOrTimesOut) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
   auto version = command(1, 70, COMMAND_REQUEST);
   version.telemetry(TELEMETRY_VERSION);
-  bridge.on_command(version, kStart);
+  command_at(bridge, kStart, version);
   EXPECT_EQ(sent().at(0).data[0], 0x10);
-  bridge.on_frame(from_valve(0xD8, codec::VersionInfo{{1, 2, 'e'}, {1, 0, 0}}, kStart + 20ms));
+  deliver(bridge, from_valve(0xD8, codec::VersionInfo{{1, 2, 'e'}, {1, 0, 0}}, kStart + 20ms));
   EXPECT_EQ(sink.states_of(70), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 
   auto voltage = command(1, 71, COMMAND_REQUEST);
   voltage.telemetry(TELEMETRY_VOLTAGE);
-  bridge.on_command(voltage, kStart + 1s);
-  bridge.tick(kStart + 3s);
+  command_at(bridge, kStart + 1s, voltage);
+  tick_at(bridge, kStart + 3s);
   EXPECT_EQ(sink.states_of(71), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
   EXPECT_EQ(sink.last_reason(), "no reply within 2000 ms");
 }
@@ -362,14 +390,14 @@ TEST_F(BridgeTest, RequestCompletesWhenTheReplyArrivesOrTimesOut) {
 TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
   // The sheet: a request sets the resend period "until changed"; a one-shot request would
   // silently stop the gateway's 100 ms position stream, so the gateway puts its schedule back.
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
   auto once = command(1, 75, COMMAND_REQUEST);
   once.telemetry(TELEMETRY_POSITION);
-  bridge.on_command(once, kStart);
+  command_at(bridge, kStart, once);
   EXPECT_EQ(sent().at(0).data[1], 0);  // the client's request, as asked
-  bridge.on_frame(from_valve(0xD8, codec::Position{12.0}, kStart + 10ms));
+  deliver(bridge, from_valve(0xD8, codec::Position{12.0}, kStart + 10ms));
   EXPECT_EQ(sink.states_of(75), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   const auto restored = sent();
   ASSERT_EQ(restored.size(), 1u);
@@ -379,8 +407,8 @@ TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
   auto slower = command(1, 76, COMMAND_REQUEST);
   slower.telemetry(TELEMETRY_POSITION);
   slower.resend_tenths(50);  // an explicit new period is the client's choice and stands
-  bridge.on_command(slower, kStart + 1s);
-  bridge.on_frame(from_valve(0xD8, codec::Position{12.0}, kStart + 1010ms));
+  command_at(bridge, kStart + 1s, slower);
+  deliver(bridge, from_valve(0xD8, codec::Position{12.0}, kStart + 1010ms));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].data[1], 50);
@@ -388,54 +416,54 @@ TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
 
 TEST_F(BridgeTest, BaudRateChangeIsRefusedUnlessAllowed) {
   {
-    Bridge bridge(config(), gateway_bus, sink);
+    Bridge bridge(config(), gateway_bus, sink, clock);
     announce(bridge, 0xD8, 1, kStart);
     (void)sent();
     auto baud = command(1, 80, COMMAND_SET_BAUD_RATE);
     baud.bit_rate(500000);
-    bridge.on_command(baud, kStart);
+    command_at(bridge, kStart, baud);
     EXPECT_EQ(sink.states_of(80), std::vector{COMMAND_REJECTED});
     EXPECT_EQ(sink.last_reason(),
               "setting the baud rate is not allowed; start the gateway with --allow-baud-change");
     EXPECT_TRUE(sent().empty());
-    bridge.on_command(command(1, 81, COMMAND_REQUEST_BAUD_RATE), kStart);  // asking is fine
+    command_at(bridge, kStart, command(1, 81, COMMAND_REQUEST_BAUD_RATE));  // asking is fine
     EXPECT_EQ(sent().at(0).data[1], 0x55);
   }
   auto c = config();
   c.allow_baud_change = true;
-  Bridge bridge(c, gateway_bus, sink);
+  Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
   auto baud = command(1, 82, COMMAND_SET_BAUD_RATE);
   baud.bit_rate(500000);
-  bridge.on_command(baud, kStart);
+  command_at(bridge, kStart, baud);
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].data[0], 0x93);
   EXPECT_EQ(frames[0].data[1], 0xA5);
   EXPECT_EQ(frames[0].data[2], 0x01);
-  bridge.on_frame(from_valve(0xD8, codec::BaudRateReply{500000}, kStart + 10ms));
+  deliver(bridge, from_valve(0xD8, codec::BaudRateReply{500000}, kStart + 10ms));
   EXPECT_EQ(sink.states_of(82), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
 TEST_F(BridgeTest, SendFailureRejectsTheCommandVisibly) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   can::VirtualBus::set_link_up(bus_name, false);
-  bridge.on_command(command(1, 90, COMMAND_STOP), kStart);
+  command_at(bridge, kStart, command(1, 90, COMMAND_STOP));
   EXPECT_EQ(sink.states_of(90), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "CAN send failed: " + bus_name + ": link is down");
   can::VirtualBus::set_link_up(bus_name, true);
 }
 
 TEST_F(BridgeTest, StopAllStopsEveryOnlineValve) {
-  Bridge bridge(config(), gateway_bus, sink);
-  announce(bridge, 0xD8, 1, kStart);
-  announce(bridge, 0xD9, 2, kStart);
-  announce(bridge, 0xDA, 3, kStart - 10s);  // long gone
-  bridge.tick(kStart);
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xDA, 3, kStart);  // long gone by the time of the stop
+  announce(bridge, 0xD8, 1, kStart + 10s);
+  announce(bridge, 0xD9, 2, kStart + 10s);
+  tick_at(bridge, kStart + 10s);
   (void)sent();
-  EXPECT_EQ(bridge.stop_all(kStart), 2u);
+  EXPECT_EQ(stop_all_at(bridge, kStart + 10s), 2u);
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 2u);
   EXPECT_EQ(frames[0].id, 0x18EFD8D5u);
@@ -444,13 +472,13 @@ TEST_F(BridgeTest, StopAllStopsEveryOnlineValve) {
 }
 
 TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
-  Bridge bridge(config(), gateway_bus, sink);
+  Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   announce(bridge, 0xD9, 2, kStart);
-  bridge.on_command(command(1, 100, COMMAND_MANUAL), kStart, "writer-a");
-  bridge.on_command(command(2, 101, COMMAND_MANUAL), kStart, "writer-b");
+  command_at(bridge, kStart, command(1, 100, COMMAND_MANUAL), "writer-a");
+  command_at(bridge, kStart, command(2, 101, COMMAND_MANUAL), "writer-b");
   (void)sent();
-  EXPECT_EQ(bridge.stop_commanded_by("writer-a", kStart + 1s), 1u);
+  EXPECT_EQ(stop_commanded_by_at(bridge, kStart + 1s, "writer-a"), 1u);
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].id, 0x18EFD8D5u);
@@ -459,21 +487,102 @@ TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
 }
 
 TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
-  Bridge bridge(config(), gateway_bus, sink);
-  bridge.tick(kStart);
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  tick_at(bridge, kStart);
   EXPECT_TRUE(sink.gateway.empty());  // no valve could have announced itself yet
   announce(bridge, 0xD8, 1, kStart + 300ms);
-  bridge.tick(kStart + 999ms);
+  tick_at(bridge, kStart + 999ms);
   EXPECT_TRUE(sink.gateway.empty());
-  bridge.tick(kStart + 1s);
-  bridge.tick(kStart + 1500ms);
-  bridge.tick(kStart + 2s);
+  tick_at(bridge, kStart + 1s);
+  tick_at(bridge, kStart + 1500ms);
+  tick_at(bridge, kStart + 2s);
   ASSERT_EQ(sink.gateway.size(), 2u);
   EXPECT_EQ(sink.gateway[0].valves_online(), 1u);
   EXPECT_EQ(sink.gateway[0].valves_known(), 1u);
   EXPECT_EQ(sink.gateway[0].frames_out(), 9u);
   EXPECT_EQ(sink.gateway[0].bus_state(), BUS_ERROR_ACTIVE);
-  EXPECT_EQ(sink.gateway[1].stamp_ns(), static_cast<std::uint64_t>((kStart + 2s).count()));
+  EXPECT_EQ(sink.gateway[1].stamp_ns(), unix_nanoseconds(kStart + 2s));
+}
+
+// Issue 7, bug 7: an NTP or GPS step of the wall clock at boot took every valve offline (or
+// stretched every deadline), because deadlines ran on the wall clock.
+TEST_F(BridgeTest, AWallClockStepNeitherTakesValvesOfflineNorMovesDeadlines) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 1, kStart);
+  auto jog = command(1, 110, COMMAND_MILLISECONDS_TO_RUN);
+  jog.milliseconds(1500);
+  command_at(bridge, kStart, jog);
+
+  clock->step_wall(1h);  // the date is set: an hour later on the wall, no time passed
+  bridge.tick();
+  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_EQ(sink.states_of(110), std::vector{COMMAND_ACCEPTED});
+
+  clock->step_wall(-2h);  // and set back again, further than it went
+  clock->advance(1500ms);
+  bridge.tick();
+  EXPECT_EQ(sink.states_of(110), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  // Published stamps follow the wall clock as it is now.
+  EXPECT_EQ(sink.statuses.back().stamp_ns(), unix_nanoseconds(kStart - 1h + 1500ms));
+  clock->advance(1501ms);  // 3 s of steady time without I'm Here
+  bridge.tick();
+  EXPECT_FALSE(sink.presences.back().online());
+}
+
+// Issue 7, bug 2: when another serial took over an address, the displaced valve stayed online
+// at it, so its commands went to the new occupant until it announced itself again.
+TEST_F(BridgeTest, ADisplacedValvesCommandsNeverGoToTheValveThatTookItsAddress) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 2, kStart);
+  announce(bridge, 0xD8, 1, kStart + 1s);  // TJV000001 joins and takes 0xD8
+  const auto displaced = std::find_if(sink.presences.begin(), sink.presences.end(),
+                                      [](auto& p) { return p.serial() == 2 && !p.online(); });
+  ASSERT_NE(displaced, sink.presences.end()) << "the displaced valve's presence goes offline";
+  (void)sent();
+
+  command_at(bridge, kStart + 1s, command(2, 120, COMMAND_STOP));
+  EXPECT_EQ(sink.states_of(120), std::vector{COMMAND_REJECTED});
+  EXPECT_EQ(sink.last_reason(),
+            "valve TJV000002 is offline: TJV000001 took its address 0xD8 and it has not "
+            "announced its new one yet");
+  EXPECT_TRUE(sent().empty()) << "nothing may reach TJV000001 on TJV000002's behalf";
+
+  announce(bridge, 0xD9, 2, kStart + 1s + 31ms);  // it announces where it is now
+  EXPECT_TRUE(sink.presences.back().online());
+  (void)sent();
+  command_at(bridge, kStart + 1100ms, command(2, 121, COMMAND_STOP));
+  EXPECT_EQ(sink.states_of(121), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  const auto frames = sent();
+  ASSERT_EQ(frames.size(), 1u);
+  EXPECT_EQ(frames[0].id, 0x18EFD9D5u);
+}
+
+TEST_F(BridgeTest, ADisplacedValveKeepsWorkingOnItsCommand) {
+  // The valve did not stop because its address changed; only where to reach it did.
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 2, kStart);
+  deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
+  command_at(bridge, kStart, target(2, 130, 90.0f));
+  announce(bridge, 0xD8, 1, kStart + 200ms);
+  announce(bridge, 0xD9, 2, kStart + 231ms);
+  deliver(bridge, from_valve(0xD9, codec::Position{90.0}, kStart + 1s));
+  EXPECT_EQ(sink.states_of(130), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
+TEST_F(BridgeTest, NextDeadlineIsTheEarliestOfStatusExpiryAndCommands) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  const SteadyTime start = clock->steady();
+  EXPECT_EQ(bridge.next_deadline(), start + 1s);  // the first gateway status
+  announce(bridge, 0xD8, 1, kStart);
+  auto jog = command(1, 140, COMMAND_MILLISECONDS_TO_RUN);
+  jog.milliseconds(300);
+  command_at(bridge, kStart + 100ms, jog);
+  EXPECT_EQ(bridge.next_deadline(), start + 400ms);
+  tick_at(bridge, kStart + 400ms);
+  EXPECT_EQ(sink.states_of(140), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(bridge.next_deadline(), start + 1s);
+  tick_at(bridge, kStart + 1s);  // status published; then expiry (3 s + 1 ns) is later
+  EXPECT_EQ(bridge.next_deadline(), start + 2s);
 }
 
 }  // namespace

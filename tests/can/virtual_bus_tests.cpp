@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <optional>
 #include <thread>
 
+#include "support/eventually.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/codec.hpp"
 
@@ -9,6 +12,7 @@ namespace teejet::can {
 namespace {
 
 using namespace std::chrono_literals;
+using teejet::testing::eventually;
 
 codec::CanFrame position_from(std::uint8_t valve, double degrees) {
   return codec::encode(valve, codec::Position{degrees}).value();
@@ -21,7 +25,7 @@ class VirtualBusTest : public ::testing::Test {
   // A unique bus per test: parallel ctest runs share the process-wide registry of names.
   std::string bus_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::shared_ptr<ManualClock> clock =
-      std::make_shared<ManualClock>(Timestamp{1'700'000'000'000'000'000});
+      std::make_shared<ManualClock>(Timestamp{Duration{1'700'000'000'000'000'000}});
 };
 
 TEST_F(VirtualBusTest, DeliversToOtherEndpointsButNotBackToTheSender) {
@@ -80,7 +84,7 @@ TEST_F(VirtualBusTest, StampsFramesWithTheInjectedClock) {
   ASSERT_TRUE(a.send(stop_to(0xD8)));
   auto got = b.receive(1s);
   ASSERT_TRUE(got);
-  EXPECT_EQ(got->received, Timestamp{1'700'000'000'001'500'000});
+  EXPECT_EQ(got->received, Timestamp{Duration{1'700'000'000'001'500'000}});
 }
 
 TEST_F(VirtualBusTest, InjectedFramesReachOnlyThatEndpoint) {
@@ -96,10 +100,15 @@ TEST_F(VirtualBusTest, ReceiveWaitsForAFrameFromAnotherThread) {
   VirtualBus a(bus_name), b(bus_name);
   ASSERT_TRUE(a.open());
   ASSERT_TRUE(b.open());
-  std::thread sender([&] { ASSERT_TRUE(a.send(stop_to(0xD8))); });
-  auto got = b.receive(5s);
-  sender.join();
+  std::optional<TimedFrame> got;
+  std::jthread receiver([&] { got = b.receive(30s); });
+  // Send only once the receiver is blocked: a frame already queued would not test the wait.
+  ASSERT_TRUE(eventually([&] { return b.waiting_receivers() == 1; }, 5s));
+  ASSERT_TRUE(a.send(stop_to(0xD8)));
+  receiver.join();
   ASSERT_TRUE(got);
+  EXPECT_EQ(got->frame, stop_to(0xD8));
+  EXPECT_EQ(b.waiting_receivers(), 0u);
 }
 
 TEST_F(VirtualBusTest, FullQueueDropsAndCountsLikeTheKernel) {
@@ -119,7 +128,7 @@ TEST_F(VirtualBusTest, LinkDownRefusesSendsVisiblyAndRecovers) {
   VirtualBus::set_link_up(bus_name, false);
   const Status refused = a.send(stop_to(0xD8));
   EXPECT_FALSE(refused);
-  EXPECT_EQ(refused.error_number(), ENETDOWN);
+  EXPECT_EQ(refused.error().os_error, ENETDOWN);
   EXPECT_EQ(a.statistics().state, BusState::kDown);
   EXPECT_EQ(a.statistics().tx_failed, 1u);
   VirtualBus::set_link_up(bus_name, true);
@@ -141,9 +150,20 @@ TEST_F(VirtualBusTest, ClosedBusRefusesAndWakesReceivers) {
   VirtualBus a(bus_name);
   EXPECT_FALSE(a.send(stop_to(0xD8)));
   ASSERT_TRUE(a.open());
-  std::thread closer([&] { a.close(); });
-  EXPECT_FALSE(a.receive(5s));
-  closer.join();
+  std::optional<TimedFrame> got = TimedFrame{};
+  std::atomic<bool> returned = false;
+  std::jthread receiver([&] {
+    got = a.receive(30s);
+    returned = true;
+  });
+  // Close only once the receiver is blocked: closing first would not test the wake-up.
+  ASSERT_TRUE(eventually([&] { return a.waiting_receivers() == 1; }, 5s));
+  a.close();
+  // Well before its 30 s timeout: close() woke it.
+  ASSERT_TRUE(eventually([&] { return returned.load(); }, 5s));
+  receiver.join();
+  EXPECT_FALSE(got);
+  EXPECT_FALSE(a.send(stop_to(0xD8)));
 }
 
 }  // namespace

@@ -21,7 +21,6 @@ void PrintTo(const LogRecord& record, std::ostream* out) {
 namespace {
 
 using codec::CanFrame;
-using codec::ErrorCode;
 
 CanFrame extended_frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes) {
   CanFrame frame;

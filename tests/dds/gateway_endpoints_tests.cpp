@@ -4,17 +4,16 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
-#include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <cstdio>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <functional>
-#include <mutex>
 
+#include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
-#include "teejet/dds/gateway_endpoints.hpp"
+#include "support/test_domain.hpp"
+#include "teejet/dds/command_subscription.hpp"
+#include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
@@ -23,17 +22,14 @@ namespace {
 
 using namespace std::chrono_literals;
 using eprosima::fastdds::dds::DataReader;
+using eprosima::fastdds::dds::DataWriter;
 using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
+using teejet::testing::DdsPeer;
 using teejet::testing::eventually;
 using teejet::testing::Subprocess;
-
-int test_domain() {
-  // Shared memory is not separated by network namespaces: each test binary keeps to its own
-  // range of domains (dds 10-99, gateway 100-199, valvectl 200-231).
-  return 10 + static_cast<int>(::getpid() % 90);
-}
+using teejet::testing::test_domain;
 
 ValvePresence presence(std::uint32_t serial, std::uint8_t address) {
   ValvePresence p;
@@ -56,21 +52,75 @@ std::vector<std::pair<Sample, SampleInfo>> take_all(DataReader* reader) {
   return out;
 }
 
+// A command writer of an ECU, matched with the gateway's reader.
+DataWriter* command_writer(DdsPeer& ecu) {
+  auto topic = ecu.participant().topic<ValveCommandPubSubType>(topics::kCommand);
+  auto writer = ecu.participant().writer(*topic, topics::command_writer_qos());
+  if (!writer) return nullptr;
+  const bool matched = eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus status;
+        (*writer)->get_publication_matched_status(status);
+        return status.current_count > 0;
+      },
+      10s);
+  return matched ? *writer : nullptr;
+}
+
+ValveCommand stop_command(std::uint32_t id) {
+  ValveCommand command;
+  command.serial(1);  // one instance: KEEP_LAST would drop, KEEP_ALL must not
+  command.command_id(id);
+  command.kind(COMMAND_STOP);
+  return command;
+}
+
 class GatewayEndpointsTest : public ::testing::Test {
  protected:
-  Participant gateway{{.domain = test_domain(), .name = "gateway-under-test"}};
-  GatewayPublisher publisher{gateway};
+  void SetUp() override {
+    auto participant = Participant::create({.domain = test_domain(), .name = "gateway-under-test"});
+    ASSERT_TRUE(participant) << participant.error().reason;
+    gateway = std::move(*participant);
+    auto made = GatewayPublisher::create(*gateway);
+    ASSERT_TRUE(made) << made.error().reason;
+    publisher = std::move(*made);
+  }
+
+  std::unique_ptr<CommandSubscription> subscribe() {
+    auto made = CommandSubscription::create(*gateway, lost);
+    EXPECT_TRUE(made) << made.error().reason;
+    return made ? std::move(*made) : nullptr;
+  }
+
+  // Waits (up to `deadline`) and takes until `enough` holds over everything taken so far.
+  static CommandSubscription::Events collect(
+      CommandSubscription& subscription,
+      const std::function<bool(const CommandSubscription::Events&)>& enough,
+      std::chrono::milliseconds deadline) {
+    CommandSubscription::Events all;
+    const auto until = std::chrono::steady_clock::now() + deadline;
+    while (!enough(all) && std::chrono::steady_clock::now() < until) {
+      auto events = subscription.wait(100ms);
+      for (auto& c : events.commands) all.commands.push_back(std::move(c));
+      for (auto& l : events.lost_commanders) all.lost_commanders.push_back(std::move(l));
+    }
+    return all;
+  }
+
+  std::unique_ptr<Participant> gateway;
+  std::unique_ptr<GatewayPublisher> publisher;
+  std::shared_ptr<LostCommanders> lost = std::make_shared<LostCommanders>();
 };
 
 TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
-  publisher.presence(presence(1, 0xD8));
-  publisher.presence(presence(2, 0xD9));
-  publisher.presence(presence(3, 0xDA));
-  publisher.presence(presence(1, 0xDB));  // KEEP_LAST 1: only the newest per valve
+  publisher->presence(presence(1, 0xD8));
+  publisher->presence(presence(2, 0xD9));
+  publisher->presence(presence(3, 0xDA));
+  publisher->presence(presence(1, 0xDB));  // KEEP_LAST 1: only the newest per valve
 
-  Participant late{{.domain = test_domain(), .name = "late-ecu"}};
-  auto* reader = late.reader(late.topic<ValvePresencePubSubType>(topics::kPresence),
-                             topics::state_reader_qos());
+  DdsPeer late(test_domain(), "late-ecu");
+  auto* reader = late.reader<ValvePresence>();
+  ASSERT_NE(reader, nullptr);
   std::map<std::uint32_t, std::uint8_t> seen;
   ASSERT_TRUE(eventually(
       [&] {
@@ -84,40 +134,47 @@ TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
   EXPECT_EQ(seen[2], 0xD9);
 }
 
-TEST_F(GatewayEndpointsTest, TelemetryCarriesTheCanReceiveTimeAsSourceTimestamp) {
-  Participant ecu{{.domain = test_domain(), .name = "ecu"}};
-  auto* reader =
-      ecu.reader(ecu.topic<ValvePositionPubSubType>(topics::kPosition), topics::state_reader_qos());
-  ValvePosition position;
-  position.serial(4711);
-  position.degrees(42.5f);
-  position.received_ns(1'700'000'000'123'456'789);
+TEST_F(GatewayEndpointsTest, EveryTelemetryTypeReachesItsTopicWithTheCanReceiveTimeAsSource) {
+  DdsPeer ecu(test_domain(), "ecu");
+  auto* position = ecu.reader<ValvePosition>();
+  auto* cycles = ecu.reader<ValveCycleCount>();
+  ASSERT_TRUE(position && cycles);
+  ValvePosition sample;
+  sample.serial(4711);
+  sample.degrees(42.5f);
+  sample.received_ns(1'700'000'000'123'456'789);
+  ValveCycleCount count;
+  count.serial(4711);
+  count.count(99);
+  count.received_ns(1'700'000'000'000'000'001);
   ASSERT_TRUE(eventually(
       [&] {
-        publisher.telemetry(position);
-        return reader->get_unread_count() > 0;
+        publisher->telemetry(sample);
+        publisher->telemetry(count);
+        return position->get_unread_count() > 0 && cycles->get_unread_count() > 0;
       },
       10s));
-  auto samples = take_all<ValvePosition>(reader);
-  ASSERT_FALSE(samples.empty());
-  EXPECT_FLOAT_EQ(samples[0].first.degrees(), 42.5f);
-  EXPECT_EQ(samples[0].second.source_timestamp.seconds(), 1'700'000'000);
-  EXPECT_EQ(samples[0].second.source_timestamp.nanosec(), 123'456'789u);
+  auto positions = take_all<ValvePosition>(position);
+  ASSERT_FALSE(positions.empty());
+  EXPECT_FLOAT_EQ(positions[0].first.degrees(), 42.5f);
+  EXPECT_EQ(positions[0].second.source_timestamp.seconds(), 1'700'000'000);
+  EXPECT_EQ(positions[0].second.source_timestamp.nanosec(), 123'456'789u);
+  EXPECT_EQ(take_all<ValveCycleCount>(cycles).at(0).first.count(), 99u);
 }
 
 TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {
-  Participant ecu{{.domain = test_domain(), .name = "ecu"}};
-  auto* reader =
-      ecu.reader(ecu.topic<ValveErrorPubSubType>(topics::kError), topics::state_reader_qos());
+  DdsPeer ecu(test_domain(), "ecu");
+  auto* reader = ecu.reader<ValveError>();
+  ASSERT_NE(reader, nullptr);
   ValveError error;
   error.serial(9);
   error.kind(ERROR_HIGH_VOLTAGE);
   error.value(17.2f);
   error.limit(16.5f);
-  publisher.telemetry(error);
+  publisher->telemetry(error);
   ASSERT_TRUE(eventually([&] { return reader->get_unread_count() > 0; }, 10s));
   (void)take_all<ValveError>(reader);
-  publisher.error_cleared(9, ERROR_HIGH_VOLTAGE);
+  publisher->error_cleared(9, ERROR_HIGH_VOLTAGE);
   bool disposed = false;
   ASSERT_TRUE(eventually(
       [&] {
@@ -130,80 +187,74 @@ TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {
       10s));
 }
 
-struct CommandLog {
-  std::mutex mutex;
-  std::condition_variable changed;
-  std::vector<std::uint32_t> ids;
-  std::vector<std::string> writers;
-  std::vector<std::string> lost;
-
-  bool wait(const std::function<bool()>& condition, std::chrono::milliseconds deadline) {
-    std::unique_lock lock(mutex);
-    return changed.wait_for(lock, deadline, condition);
-  }
-};
-
 TEST_F(GatewayEndpointsTest, EveryCommandArrivesInOrderWithItsWriter) {
-  CommandLog log;
-  CommandSubscription subscription(
-      gateway,
-      [&](const ValveCommand& command, const std::string& writer) {
-        std::lock_guard lock(log.mutex);
-        log.ids.push_back(command.command_id());
-        log.writers.push_back(writer);
-        log.changed.notify_all();
-      },
-      [](const std::string&) {});
-
-  Participant ecu{{.domain = test_domain(), .name = "ecu"}};
-  auto* writer =
-      ecu.writer(ecu.topic<ValveCommandPubSubType>(topics::kCommand), topics::command_writer_qos());
-  ASSERT_TRUE(eventually(
-      [&] {
-        eprosima::fastdds::dds::PublicationMatchedStatus matched;
-        writer->get_publication_matched_status(matched);
-        return matched.current_count > 0;
-      },
-      10s));
+  auto subscription = subscribe();
+  ASSERT_NE(subscription, nullptr);
+  DdsPeer ecu(test_domain(), "ecu");
+  auto* writer = command_writer(ecu);
+  ASSERT_NE(writer, nullptr);
   for (std::uint32_t id = 1; id <= 200; ++id) {
-    ValveCommand command;
-    command.serial(1);  // one instance: KEEP_LAST would drop, KEEP_ALL must not
-    command.command_id(id);
-    command.kind(COMMAND_STOP);
+    auto command = stop_command(id);
     ASSERT_EQ(writer->write(&command), true);
   }
-  ASSERT_TRUE(log.wait([&] { return log.ids.size() >= 200; }, 10s)) << log.ids.size();
-  std::lock_guard lock(log.mutex);
-  for (std::uint32_t i = 0; i < 200; ++i) ASSERT_EQ(log.ids[i], i + 1);
-  EXPECT_EQ(log.writers.front(), log.writers.back());
-  EXPECT_FALSE(log.writers.front().empty());
+  const auto events = collect(
+      *subscription, [](const auto& e) { return e.commands.size() >= 200; }, 10s);
+  ASSERT_EQ(events.commands.size(), 200u);
+  for (std::uint32_t i = 0; i < 200; ++i) ASSERT_EQ(events.commands[i].command.command_id(), i + 1);
+  EXPECT_EQ(events.commands.front().writer, events.commands.back().writer);
+  EXPECT_FALSE(events.commands.front().writer.empty());
+}
+
+TEST_F(GatewayEndpointsTest, AWaitEndsAtItsTimeoutOrWhenWoken) {
+  auto subscription = subscribe();
+  ASSERT_NE(subscription, nullptr);
+  EXPECT_TRUE(subscription->wait(10ms).commands.empty());
+  subscription->wake();  // before the wait: it must not block then
+  EXPECT_TRUE(subscription->wait(1h).commands.empty());
+  lost->report("01.02.03");
+  EXPECT_EQ(subscription->wait(1h).lost_commanders, std::vector<std::string>{"01.02.03"});
+}
+
+// Issue 7, bug 5: the subscription registered as listener on a reader it did not own and never
+// detached, so once it was destroyed Fast DDS called freed memory. Now it owns its reader and
+// deletes it: a later command has nowhere to go, and nothing of the old subscription runs.
+TEST_F(GatewayEndpointsTest, ADestroyedSubscriptionTakesItsReaderWithIt) {
+  subscribe().reset();
+  DdsPeer ecu(test_domain(), "ecu");
+  auto topic = ecu.participant().topic<ValveCommandPubSubType>(topics::kCommand);
+  auto writer = ecu.participant().writer(*topic, topics::command_writer_qos());
+  ASSERT_TRUE(writer);
+  // A reader that still existed would match within a discovery round; give it several.
+  EXPECT_FALSE(eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus matched;
+        (*writer)->get_publication_matched_status(matched);
+        return matched.current_count > 0;
+      },
+      2s));
+  auto command = stop_command(1);
+  EXPECT_TRUE((*writer)->write(&command));
+  // A new subscription works as the first did.
+  auto again = subscribe();
+  ASSERT_NE(command_writer(ecu), nullptr);
 }
 
 TEST_F(GatewayEndpointsTest, AKilledCommanderIsReportedLostForTheFailSafe) {
-  CommandLog log;
-  CommandSubscription subscription(
-      gateway,
-      [&](const ValveCommand&, const std::string& writer) {
-        std::lock_guard lock(log.mutex);
-        log.writers.push_back(writer);
-        log.changed.notify_all();
-      },
-      [&](const std::string& writer) {
-        std::lock_guard lock(log.mutex);
-        log.lost.push_back(writer);
-        log.changed.notify_all();
-      });
-
+  auto subscription = subscribe();
+  ASSERT_NE(subscription, nullptr);
   Subprocess commander({COMMAND_WRITER_PATH, std::to_string(test_domain()), "77"});
-  ASSERT_TRUE(log.wait([&] { return !log.writers.empty(); }, 20s)) << "no command arrived";
+  const auto first = collect(
+      *subscription, [](const auto& e) { return !e.commands.empty(); }, 20s);
+  ASSERT_FALSE(first.commands.empty()) << "no command arrived";
   const auto killed_at = std::chrono::steady_clock::now();
   commander.signal(SIGKILL);
   commander.wait(commander.elapsed() + 10s);  // reaps it
 
-  ASSERT_TRUE(log.wait([&] { return !log.lost.empty(); }, 10s)) << "liveliness loss not seen";
+  const auto lost_events = collect(
+      *subscription, [](const auto& e) { return !e.lost_commanders.empty(); }, 10s);
+  ASSERT_FALSE(lost_events.lost_commanders.empty()) << "liveliness loss not seen";
   const auto noticed_after = std::chrono::steady_clock::now() - killed_at;
-  std::lock_guard lock(log.mutex);
-  EXPECT_EQ(log.lost.front(), log.writers.front());
+  EXPECT_EQ(lost_events.lost_commanders.front(), first.commands.front().writer);
   std::printf("commander loss noticed %lld ms after SIGKILL\n",
               static_cast<long long>(
                   std::chrono::duration_cast<std::chrono::milliseconds>(noticed_after).count()));

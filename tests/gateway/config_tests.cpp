@@ -2,6 +2,7 @@
 
 #include <fstream>
 
+#include "bus_backend.hpp"
 #include "config.hpp"
 
 namespace teejet::gateway {
@@ -79,22 +80,63 @@ TEST(GatewayConfig, PollEntriesChangeOnlyWhatTheyName) {
             codec::ToValveMessage{codec::RequestTemperature{0}});
 }
 
-TEST(GatewayConfig, MistakesAreNamedWithTheirLine) {
-  EXPECT_EQ(error_of("gateway:\n  nmae: x\n"), "test.yaml: line 2: unknown key 'nmae' in gateway");
-  EXPECT_EQ(error_of("polling: {}\n"), "test.yaml: line 1: unknown key 'polling' in the file");
+TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
+  EXPECT_EQ(error_of("gateway:\n  nmae: x\n"),
+            "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "
+            "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change)");
+  EXPECT_EQ(error_of("polling: {}\n"),
+            "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, valves, "
+            "simulator)");
   EXPECT_EQ(error_of("poll:\n  position: 300\n"),
-            "test.yaml: line 2: poll.position is at most 255 tenths of a second");
+            "test.yaml:2: poll.position: 300 is not a whole number from 0 to 255");
   EXPECT_EQ(error_of("gateway: {on_commander_lost: panic}"),
-            "test.yaml: line 1: gateway.on_commander_lost is 'stop' or 'ignore'");
+            "test.yaml:1: gateway.on_commander_lost: 'panic' is not 'stop' or 'ignore'");
   EXPECT_EQ(error_of("gateway: {offline_after_s: 0}"),
-            "test.yaml: line 1: gateway.offline_after_s must be greater than 0");
+            "test.yaml:1: gateway.offline_after_s: 0 s is outside the allowed range: more than 0, "
+            "at most 3600 s");
   EXPECT_EQ(error_of("valves: {TJV12x: {opened_deg: 90}}"),
-            "test.yaml: line 1: valves: serial 'TJV12x' is not TJV followed by digits, nor "
-            "digits alone");
+            "test.yaml:1: valves: serial 'TJV12x' is not TJV followed by digits, nor digits alone");
   EXPECT_EQ(error_of("valves: {default: {opened_deg: 350}}"),
-            "test.yaml: line 1: valves.default: need 0 <= closed_deg < opened_deg, opened_deg "
-            "<= 340 or = 360");
+            "test.yaml:1: valves.default: need 0 <= closed_deg < opened_deg, opened_deg <= 340 or "
+            "= 360");
+  EXPECT_EQ(error_of("gateway: {domain: 1}\ngateway: {domain: 2}\n"),
+            "test.yaml:2: the file: 'gateway' is given twice");
   EXPECT_NE(error_of("gateway: [unclosed").find("test.yaml: "), std::string::npos);
+}
+
+// Values that parsed before and then broke the gateway at run time (issue 7, bug 3): a zero
+// assumed speed divided by zero when a move's deadline was computed, a negative tolerance made
+// every move time out. Every number now has its range.
+TEST(GatewayConfig, EveryNumberHasItsRange) {
+  EXPECT_EQ(error_of("commands: {assumed_dps: 0}"),
+            "test.yaml:1: commands.assumed_dps: 0 is not a whole number from 1 to 359");
+  EXPECT_EQ(error_of("commands: {completion_tolerance_deg: -1}"),
+            "test.yaml:1: commands.completion_tolerance_deg: -1 is outside 0 to 45");
+  EXPECT_EQ(error_of("commands: {completion_tolerance_deg: .nan}"),
+            "test.yaml:1: commands.completion_tolerance_deg: '.nan' is not a number");
+  EXPECT_EQ(
+      error_of("commands: {move_margin_s: 1e30}"),
+      "test.yaml:1: commands.move_margin_s: 1e30 s is outside the allowed range: more than 0, "
+      "at most 3600 s");
+  EXPECT_EQ(error_of("commands: {reply_timeout_s: -2}"),
+            "test.yaml:1: commands.reply_timeout_s: -2 s is outside the allowed range: more than "
+            "0, at most 3600 s");
+  EXPECT_EQ(error_of("gateway: {offline_after_s: .inf}"),
+            "test.yaml:1: gateway.offline_after_s: '.inf' is not a number");
+  EXPECT_EQ(error_of("gateway: {domain: -1}"),
+            "test.yaml:1: gateway.domain: -1 is not a whole number from 0 to 232");
+  EXPECT_EQ(error_of("simulator: {dps: 0}"), "test.yaml:1: simulator.dps: 0 is outside 1 to 359");
+  EXPECT_EQ(error_of("valves: {default: {closed_deg: -10}}"),
+            "test.yaml:1: valves.default.closed_deg: -10 is outside 0 to 359.9");
+  // The edges of each range are accepted.
+  const auto edges = parse(
+      "commands: {assumed_dps: 359, completion_tolerance_deg: 0, move_margin_s: 3600}\n"
+      "gateway: {domain: 232, offline_after_s: 0.001}");
+  EXPECT_EQ(edges.bridge.assumed_dps, 359u);
+  EXPECT_EQ(edges.bridge.completion_tolerance_degrees, 0.0);
+  EXPECT_EQ(edges.bridge.move_margin, 3600s);
+  EXPECT_EQ(edges.domain, 232);
+  EXPECT_EQ(edges.bridge.offline_after, 1ms);
 }
 
 TEST(GatewayConfig, SimulatedValveCount) {

@@ -3,18 +3,22 @@
 // namespace (tests/netns/isolated).
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <map>
+#include <thread>
 
 #include "gateway.hpp"
+#include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
-#include "teejet/dds/participant.hpp"
+#include "support/test_domain.hpp"
+#include "teejet/can/virtual_bus.hpp"
+#include "teejet/codec/codec.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
@@ -23,18 +27,18 @@ namespace {
 
 using namespace std::chrono_literals;
 using eprosima::fastdds::dds::DataReader;
-using eprosima::fastdds::dds::DataWriter;
 using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 using teejet::testing::eventually;
-
-int domain_for_this_run() { return 100 + static_cast<int>(::getpid() % 100); }
+using teejet::testing::latest_by_serial;
+using teejet::testing::test_domain;
+using Ecu = teejet::testing::DdsPeer;
 
 GatewayConfig sim_config(const std::string& name, int valves, std::uint32_t first_serial = 1) {
   GatewayConfig config;
   config.can = "sim:" + std::to_string(valves);
-  config.domain = domain_for_this_run();
+  config.domain = test_domain();
   config.bridge.gateway_name = name;
   config.sim_first_serial = first_serial;
   config.sim_degrees_per_second = 180;  // quick moves keep the suite short
@@ -44,82 +48,11 @@ GatewayConfig sim_config(const std::string& name, int valves, std::uint32_t firs
   return config;
 }
 
-// An ECU on the same domain: reads every topic it is asked about, writes commands.
-class Ecu {
- public:
-  Ecu() : participant_({.domain = domain_for_this_run(), .name = "test-ecu"}) {
-    commands_ =
-        participant_.writer(participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand),
-                            dds::topics::command_writer_qos());
-    statuses_ = participant_.reader(
-        participant_.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus),
-        dds::topics::status_reader_qos());
-  }
-
-  template <class PubSubType>
-  DataReader* state_reader(const char* topic) {
-    return participant_.reader(participant_.topic<PubSubType>(topic),
-                               dds::topics::state_reader_qos());
-  }
-
-  // Writes once at least one gateway listens; returns the command id used.
-  std::uint32_t send(ValveCommand command) {
-    command.command_id(++next_id_);
-    command.origin("e2e-test");
-    EXPECT_TRUE(eventually(
-        [&] {
-          eprosima::fastdds::dds::PublicationMatchedStatus matched;
-          commands_->get_publication_matched_status(matched);
-          return matched.current_count > 0;
-        },
-        15s));
-    EXPECT_TRUE(commands_->write(&command));
-    return command.command_id();
-  }
-
-  // Collects statuses for `id` until `final` arrives (or the deadline passes).
-  std::vector<CommandStatus> follow(std::uint32_t id, std::chrono::milliseconds deadline = 15s) {
-    std::vector<CommandStatus> mine;
-    eventually(
-        [&] {
-          CommandStatus status;
-          SampleInfo info;
-          while (statuses_->take_next_sample(&status, &info) == ReturnCode::RETCODE_OK) {
-            if (info.valid_data) all_statuses_.push_back(status);
-          }
-          mine.clear();
-          for (const auto& s : all_statuses_) {
-            if (s.command_id() == id) mine.push_back(s);
-          }
-          return !mine.empty() && mine.back().state() != COMMAND_ACCEPTED;
-        },
-        deadline);
-    return mine;
-  }
-
-  static std::vector<CommandState> states(const std::vector<CommandStatus>& statuses) {
-    std::vector<CommandState> out;
-    for (const auto& s : statuses) out.push_back(s.state());
-    return out;
-  }
-
- private:
-  dds::Participant participant_;
-  DataWriter* commands_ = nullptr;
-  DataReader* statuses_ = nullptr;
-  std::vector<CommandStatus> all_statuses_;
-  std::uint32_t next_id_ = 0;
-};
-
-template <class Sample>
-std::map<std::uint32_t, Sample> latest_by_serial(DataReader* reader,
-                                                 std::map<std::uint32_t, Sample>& seen) {
-  Sample sample;
-  SampleInfo info;
-  while (reader->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-    if (info.valid_data) seen[sample.serial()] = sample;
-  }
-  return seen;
+// The gateway as teejet-gateway makes it: the bus its configuration names.
+std::unique_ptr<Gateway> make_gateway(const GatewayConfig& config) {
+  auto backend = make_bus_backend(config);
+  EXPECT_TRUE(backend) << backend.error().reason;
+  return std::make_unique<Gateway>(config, backend ? std::move(*backend) : BusBackend{});
 }
 
 ValveCommand command(std::uint32_t serial, CommandKind kind) {
@@ -141,7 +74,7 @@ ValveCommand move_to(std::uint32_t serial, float degrees) {
 double position_of(Gateway& gateway, std::uint32_t serial) {
   auto* simulator = gateway.simulator();
   return simulator->inspect([&](const sim::ValveBank& bank) {
-    return bank.valve_with_serial(serial)->position(simulator->clock()->now());
+    return bank.valve_with_serial(serial)->position(simulator->clock()->steady());
   });
 }
 
@@ -163,11 +96,12 @@ class GatewayE2E : public ::testing::Test {
 TEST_F(GatewayE2E, ALateJoinerSeesEveryValveOfAFullBusAtOnce) {
   // 32 valves, every address of the bus: more than any per-topic instance default of a DDS
   // implementation (Fast DDS: 10) must not matter.
-  Gateway gateway(sim_config("gw-late", 32));
+  auto gateway_owner = make_gateway(sim_config("gw-late", 32));
+  Gateway& gateway = *gateway_owner;
   start(gateway, 32);
-  Ecu late;
-  auto* presence = late.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
-  auto* position = late.state_reader<ValvePositionPubSubType>(dds::topics::kPosition);
+  Ecu late(test_domain(), "late-ecu");
+  auto* presence = late.reader<ValvePresence>();
+  auto* position = late.reader<ValvePosition>();
   std::map<std::uint32_t, ValvePresence> seen;
   std::map<std::uint32_t, ValvePosition> positions;
   ASSERT_TRUE(eventually(
@@ -188,22 +122,23 @@ TEST_F(GatewayE2E, ALateJoinerSeesEveryValveOfAFullBusAtOnce) {
 }
 
 TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
-  Gateway gateway(sim_config("gw-telemetry", 1));
+  auto gateway_owner = make_gateway(sim_config("gw-telemetry", 1));
+  Gateway& gateway = *gateway_owner;
   start(gateway, 1);
   ASSERT_TRUE(gateway.simulator()->inject_error(1, {sim::ErrorKind::kHighVoltage, 17.2, 16.5}));
-  Ecu ecu;
-  auto* version = ecu.state_reader<ValveVersionPubSubType>(dds::topics::kVersion);
-  auto* position = ecu.state_reader<ValvePositionPubSubType>(dds::topics::kPosition);
-  auto* temperature = ecu.state_reader<ValveTemperaturePubSubType>(dds::topics::kTemperature);
-  auto* voltage = ecu.state_reader<ValveVoltagePubSubType>(dds::topics::kVoltage);
-  auto* current = ecu.state_reader<ValveCurrentPubSubType>(dds::topics::kCurrent);
-  auto* dps = ecu.state_reader<ValveDegreesPerSecondPubSubType>(dds::topics::kDegreesPerSecond);
-  auto* speed = ecu.state_reader<ValveSpeedDirectionPubSubType>(dds::topics::kSpeedDirection);
-  auto* run_time = ecu.state_reader<ValveRunTimePubSubType>(dds::topics::kRunTime);
-  auto* cycles = ecu.state_reader<ValveCycleCountPubSubType>(dds::topics::kCycleCount);
-  auto* errors = ecu.state_reader<ValveErrorPubSubType>(dds::topics::kError);
-  auto* baud = ecu.state_reader<ValveBaudRatePubSubType>(dds::topics::kBaudRate);
-  auto* status = ecu.state_reader<GatewayStatusPubSubType>(dds::topics::kGatewayStatus);
+  Ecu ecu(test_domain(), "test-ecu");
+  auto* version = ecu.reader<ValveVersion>();
+  auto* position = ecu.reader<ValvePosition>();
+  auto* temperature = ecu.reader<ValveTemperature>();
+  auto* voltage = ecu.reader<ValveVoltage>();
+  auto* current = ecu.reader<ValveCurrent>();
+  auto* dps = ecu.reader<ValveDegreesPerSecond>();
+  auto* speed = ecu.reader<ValveSpeedDirection>();
+  auto* run_time = ecu.reader<ValveRunTime>();
+  auto* cycles = ecu.reader<ValveCycleCount>();
+  auto* errors = ecu.reader<ValveError>();
+  auto* baud = ecu.reader<ValveBaudRate>();
+  auto* status = ecu.reader<GatewayStatus>();
 
   const auto baud_request = ecu.send(command(1, COMMAND_REQUEST_BAUD_RATE));
   EXPECT_EQ(Ecu::states(ecu.follow(baud_request)),
@@ -266,9 +201,10 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
 TEST_F(GatewayE2E, EveryCommandKindReachesItsFinalState) {
   auto config = sim_config("gw-commands", 1);
   config.bridge.allow_baud_change = true;
-  Gateway gateway(config);
+  auto gateway_owner = make_gateway(config);
+  Gateway& gateway = *gateway_owner;
   start(gateway, 1);
-  Ecu ecu;
+  Ecu ecu(test_domain(), "test-ecu");
   const auto done = std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED};
 
   EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(move_to(1, 45.0f)))), done);
@@ -300,9 +236,10 @@ TEST_F(GatewayE2E, EveryCommandKindReachesItsFinalState) {
 }
 
 TEST_F(GatewayE2E, RejectionsCarryTheirReasonAndTimeoutsAreReported) {
-  Gateway gateway(sim_config("gw-reject", 1));
+  auto gateway_owner = make_gateway(sim_config("gw-reject", 1));
+  Gateway& gateway = *gateway_owner;
   start(gateway, 1);
-  Ecu ecu;
+  Ecu ecu(test_domain(), "test-ecu");
   auto out_of_range = ecu.follow(ecu.send(move_to(1, 400.0f)));
   ASSERT_EQ(Ecu::states(out_of_range), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(out_of_range[0].reason().to_string(),
@@ -320,7 +257,8 @@ TEST_F(GatewayE2E, RejectionsCarryTheirReasonAndTimeoutsAreReported) {
   gateway.stop();
   auto config = sim_config("gw-timeout", 1);
   config.bridge.limits[1] = bridge::ValveLimits{0, 360};
-  Gateway unreachable(config);
+  auto unreachable_owner = make_gateway(config);
+  Gateway& unreachable = *unreachable_owner;
   start(unreachable, 1);
   auto timed_out = ecu.follow(ecu.send(move_to(1, 180.0f)), 20s);
   ASSERT_EQ(Ecu::states(timed_out), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
@@ -328,10 +266,11 @@ TEST_F(GatewayE2E, RejectionsCarryTheirReasonAndTimeoutsAreReported) {
 }
 
 TEST_F(GatewayE2E, AReaddressedValveKeepsItsInstanceAndItsCommands) {
-  Gateway gateway(sim_config("gw-readdress", 2, 10));  // TJV000010 at 0xD8, TJV000011 at 0xD9
+  auto gateway_owner = make_gateway(sim_config("gw-readdress", 2, 10));
+  Gateway& gateway = *gateway_owner;  // TJV000010 at 0xD8, TJV000011 at 0xD9
   start(gateway, 2);
-  Ecu ecu;
-  auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
+  Ecu ecu(test_domain(), "test-ecu");
+  auto* presence = ecu.reader<ValvePresence>();
   std::map<std::uint32_t, ValvePresence> seen;
   ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }, 15s));
   EXPECT_EQ(seen[10].address(), 0xD8);
@@ -356,10 +295,11 @@ TEST_F(GatewayE2E, AReaddressedValveKeepsItsInstanceAndItsCommands) {
 }
 
 TEST_F(GatewayE2E, ValvesGoOfflineWhenTheirIAmHereStops) {
-  Gateway gateway(sim_config("gw-offline", 2));
+  auto gateway_owner = make_gateway(sim_config("gw-offline", 2));
+  Gateway& gateway = *gateway_owner;
   start(gateway, 2);
-  Ecu ecu;
-  auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
+  Ecu ecu(test_domain(), "test-ecu");
+  auto* presence = ecu.reader<ValvePresence>();
   std::map<std::uint32_t, ValvePresence> seen;
   ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 2; }, 15s));
   const auto silenced_at = std::chrono::steady_clock::now();
@@ -370,7 +310,7 @@ TEST_F(GatewayE2E, ValvesGoOfflineWhenTheirIAmHereStops) {
         return !seen[1].online() && !seen[2].online();
       },
       15s));
-  // Offline after 1.5 s of silence (configured), detected by a 50 ms clock: within 3 s.
+  // Offline after 1.5 s of silence (configured), on the dot of its deadline: well within 3 s.
   EXPECT_LT(std::chrono::steady_clock::now() - silenced_at, 3s);
   auto rejected = ecu.follow(ecu.send(move_to(1, 10.0f)));
   ASSERT_EQ(Ecu::states(rejected), std::vector{COMMAND_REJECTED});
@@ -378,12 +318,14 @@ TEST_F(GatewayE2E, ValvesGoOfflineWhenTheirIAmHereStops) {
 }
 
 TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
-  Gateway left(sim_config("gw-left", 2, 1));
-  Gateway right(sim_config("gw-right", 2, 101));
+  auto left_owner = make_gateway(sim_config("gw-left", 2, 1));
+  Gateway& left = *left_owner;
+  auto right_owner = make_gateway(sim_config("gw-right", 2, 101));
+  Gateway& right = *right_owner;
   start(left, 2);
   start(right, 2);
-  Ecu ecu;
-  auto* presence = ecu.state_reader<ValvePresencePubSubType>(dds::topics::kPresence);
+  Ecu ecu(test_domain(), "test-ecu");
+  auto* presence = ecu.reader<ValvePresence>();
   std::map<std::uint32_t, ValvePresence> seen;
   ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, seen).size() == 4; }, 15s));
   EXPECT_EQ(seen[2].gateway().to_string(), "gw-left");
@@ -402,23 +344,24 @@ TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
 TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {
   auto config = sim_config("gw-failsafe", 2);
   config.sim_opened_degrees = 360;  // full-turn valves: a manual run never ends by itself
-  Gateway gateway(config);
+  auto gateway_owner = make_gateway(config);
+  Gateway& gateway = *gateway_owner;
   start(gateway, 2);
   const auto running = [&](std::uint32_t serial) {
     auto* simulator = gateway.simulator();
     return simulator->inspect([&](const sim::ValveBank& bank) {
-      return bank.valve_with_serial(serial)->running(simulator->clock()->now());
+      return bank.valve_with_serial(serial)->running(simulator->clock()->steady());
     });
   };
-  Ecu bystander;  // another ECU's manual run must survive the first one's death
+  Ecu bystander(test_domain(),
+                "bystander-ecu");  // another ECU's manual run must survive the first one's death
   auto manual = command(2, COMMAND_MANUAL);
   manual.speed_percent(10);
   const auto bystander_run = bystander.send(manual);
   ASSERT_EQ(Ecu::states(bystander.follow(bystander_run, 1s)), std::vector{COMMAND_ACCEPTED});
 
   // tests/dds/command_writer: writes Manual (open, 50 %) for serial 1, then waits to be killed.
-  teejet::testing::Subprocess commander(
-      {COMMAND_WRITER_PATH, std::to_string(domain_for_this_run()), "1"});
+  teejet::testing::Subprocess commander({COMMAND_WRITER_PATH, std::to_string(test_domain()), "1"});
   ASSERT_TRUE(commander.wait_for_stdout("sent", 20s));
   ASSERT_TRUE(eventually([&] { return running(1); }, 5s)) << "the manual run never started";
   commander.signal(SIGKILL);
@@ -432,6 +375,61 @@ TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {
               static_cast<long long>(
                   std::chrono::duration_cast<std::chrono::milliseconds>(stopped_after).count()));
   EXPECT_TRUE(running(2)) << "the fail-safe stopped a valve the dead commander never drove";
+}
+
+// Issue 7, bug 1: stop() sent Stop to every valve while the command reader still existed, so a
+// command arriving in that window started a valve after the Stop and the process exited with it
+// running. An ECU writes Manual commands as fast as it can while the gateway stops: on the wire,
+// the last command the valve receives must be the Stop.
+TEST_F(GatewayE2E, ShutdownStopsTakingCommandsBeforeItStopsTheValves) {
+  auto config = sim_config("gw-shutdown", 1);
+  config.sim_opened_degrees = 360;  // a full-turn valve: a manual run never ends by itself
+  auto gateway_owner = make_gateway(config);
+  Gateway& gateway = *gateway_owner;
+  start(gateway, 1);
+  // The wire as the valves see it: every controller-to-valve frame, in order.
+  can::VirtualBus wire(gateway.simulator()->bus_name(),
+                       {.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
+  ASSERT_TRUE(wire.open());
+  Ecu ecu(test_domain(), "racing-ecu");
+  auto manual = command(1, COMMAND_MANUAL);
+  manual.speed_percent(20);
+  ASSERT_EQ(Ecu::states(ecu.follow(ecu.send(manual), 2s)), std::vector{COMMAND_ACCEPTED});
+
+  std::atomic<bool> racing{true};
+  std::atomic<int> written{0};
+  std::thread racer([&] {
+    while (racing) written += ecu.write(manual) ? 1 : 0;
+  });
+  ASSERT_TRUE(eventually([&] { return written > 50; }, 10s));
+  gateway.stop();
+  racing = false;
+  racer.join();
+
+  std::vector<std::uint8_t> run_commands;  // message ids of the run commands the valve got
+  while (const auto frame = wire.receive(0ms)) {
+    const auto decoded = codec::decode(frame->frame);
+    if (!decoded) continue;
+    const auto& message = std::get<codec::ToValveMessage>(decoded->message);
+    if (codec::is_run_command(message)) run_commands.push_back(codec::message_id(message));
+  }
+  ASSERT_FALSE(run_commands.empty());
+  EXPECT_EQ(run_commands.back(), 0x00) << "a Manual (0x01) reached the valve after its Stop; "
+                                       << written << " commands raced the shutdown";
+}
+
+// Issue 7, bug 4: when the bus failed to open after the embedded simulator had started, start()
+// returned the error and left the simulator running.
+TEST(GatewayStart, AFailedStartLeavesNothingRunning) {
+  auto config = sim_config("gw-no-bus", 1);
+  auto backend = make_bus_backend(config);
+  ASSERT_TRUE(backend);
+  backend->bus = std::make_unique<can::VirtualBus>("");  // a bus that cannot open
+  Gateway gateway(config, std::move(*backend));
+  const auto started = gateway.start();
+  ASSERT_FALSE(started);
+  EXPECT_EQ(started.error().reason, "a virtual bus needs a name");
+  EXPECT_FALSE(gateway.simulator()->started()) << "the simulated valves were left running";
 }
 
 }  // namespace

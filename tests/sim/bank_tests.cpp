@@ -35,7 +35,7 @@ TEST(SimValveBank, RefusesEmptyDuplicateInvalidAndOversizedBanks) {
   EXPECT_FALSE(ValveBank{}.power_up({}, kT0));
   const auto duplicate = ValveBank{}.power_up(valves_with({5, 6, 5}), kT0);
   EXPECT_FALSE(duplicate);
-  EXPECT_NE(duplicate.reason().find("TJV000005"), std::string::npos);
+  EXPECT_NE(duplicate.error().reason.find("TJV000005"), std::string::npos);
   auto invalid = valves_with({1});
   invalid[0].opened_degrees = 350;
   EXPECT_FALSE(ValveBank{}.power_up(invalid, kT0));
@@ -45,7 +45,7 @@ TEST(SimValveBank, RefusesEmptyDuplicateInvalidAndOversizedBanks) {
   ValveBank bank;
   const auto refused = bank.power_up(thirty_three, kT0);
   EXPECT_FALSE(refused);
-  EXPECT_NE(refused.reason().find("33 valves"), std::string::npos) << refused.reason();
+  EXPECT_NE(refused.error().reason.find("33 valves"), std::string::npos) << refused.error().reason;
   EXPECT_EQ(bank.size(), 0u);
   thirty_three.pop_back();
   EXPECT_TRUE(bank.power_up(thirty_three, kT0));
@@ -60,7 +60,7 @@ TEST(SimValveBank, AThirtyThirdValveAddedAtRunTimeIsRefusedAndNothingChanges) {
   const auto before = bank.assignments();
   const auto refused = bank.add_valve(valve_with(1), at_ms(10));
   EXPECT_FALSE(refused);
-  EXPECT_NE(refused.reason().find("0xD8-0xF7"), std::string::npos) << refused.reason();
+  EXPECT_NE(refused.error().reason.find("0xD8-0xF7"), std::string::npos) << refused.error().reason;
   EXPECT_EQ(bank.assignments(), before);
 }
 

@@ -128,7 +128,7 @@ TEST(SimValveRequests, RequestVersionIsAnsweredOnceOnly) {
 TEST(SimValveRequests, ResendEveryNTenthsUntilChanged) {
   SimulatedValve valve(limited_valve(0.0));
   EXPECT_EQ(valve.handle(codec::RequestPosition{5}, at_ms(0)).size(), 1u);  // at once
-  EXPECT_EQ(valve.resend_period(0x11), std::optional<Timestamp>(500ms));
+  EXPECT_EQ(valve.resend_period(0x11), std::optional<Duration>(500ms));
   EXPECT_EQ(valve.next_due(), std::optional(at_ms(500)));
   EXPECT_TRUE(valve.advance(at_ms(499)).empty());
   EXPECT_EQ(only<codec::Position>(valve.advance(at_ms(500))), codec::Position{0.0});
@@ -179,7 +179,7 @@ TEST(SimValveRequests, EachKindResendsOnItsOwnPeriod) {
         codec::RequestDegreesPerSecond{1}, codec::RequestSpeedDirection{1},
         codec::RequestRunTime{1},          codec::RequestCycleCounts{1}};
     each.handle(requests[id - 0x11], now);
-    EXPECT_EQ(each.resend_period(id), std::optional<Timestamp>(100ms)) << int{id};
+    EXPECT_EQ(each.resend_period(id), std::optional<Duration>(100ms)) << int{id};
     const auto resent = each.advance(at_ms(100));
     ASSERT_EQ(resent.size(), 1u);
     EXPECT_EQ(resent.front(), each.telemetry(id, at_ms(100))) << int{id};

@@ -1,13 +1,16 @@
-// Configuration: validation, the --inject-error syntax, the YAML file and how the command line
-// and the file compose into a bank.
+// Configuration: validation, the --inject-error syntax and how the command line and the config
+// file compose into a bank. Reading the file itself: config_file_tests.cpp.
 
 #include <gtest/gtest.h>
 
+#include "example_config.hpp"
+#include "setup.hpp"
 #include "teejet/codec/codec.hpp"
-#include "teejet/sim/setup.hpp"
 
 namespace teejet::sim {
 namespace {
+
+using testing::kExample;
 
 bool mentions(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
@@ -30,9 +33,9 @@ TEST(SimSetup, InvalidConfigurationsNameTheValveAndTheField) {
     change(config);
     const auto status = validate(config);
     EXPECT_FALSE(status) << expected;
-    EXPECT_TRUE(mentions(status.reason(), expected)) << status.reason();
+    EXPECT_TRUE(mentions(status.error().reason, expected)) << status.error().reason;
     if (config.serial <= kMaxSerial) {
-      EXPECT_TRUE(mentions(status.reason(), "TJV000042")) << status.reason();
+      EXPECT_TRUE(mentions(status.error().reason, "TJV000042")) << status.error().reason;
     }
   };
   refused([](ValveConfig& c) { c.opened_degrees = 341; }, "at most 340");
@@ -96,94 +99,6 @@ TEST(SimSetup, VersionsAndRotationsParse) {
   EXPECT_EQ(parse_rotation("counterclockwise"), codec::Rotation::kCounterclockwise);
   EXPECT_EQ(parse_rotation("cw"), codec::Rotation::kClockwise);
   EXPECT_FALSE(parse_rotation("left"));
-}
-
-// ---- YAML ----------------------------------------------------------------------------------
-
-constexpr const char* kExample = R"(
-defaults:
-  dps: 120
-  opened: 360
-valves:
-  - serial: TJV123456
-    start: 45
-    opening_direction: counterclockwise
-    part_number: 4711
-    application_version: "1.02e"
-    bootloader_version: "0.09"
-    volts: 12.6
-    valve_temperature: 31
-    sensor_temperature: -2
-    running_amps: 0.85
-    bit_rate: 500k
-    errors:
-      - {kind: high-temperature, value: 95, limit: 85}
-  - serial: 123457
-    opened: 90
-hotplug:
-  - serial: 100
-    dps: 60
-errors:
-  - {serial: 123457, kind: min-dps, value: 20, limit: 30, direction: close}
-)";
-
-TEST(SimSetup, TheExampleFileParses) {
-  const auto file = parse_config(kExample, "example.yaml");
-  ASSERT_TRUE(file) << file.error().reason;
-  EXPECT_EQ(file->defaults.degrees_per_second, 120.0);
-  ASSERT_EQ(file->valves.size(), 2u);
-  const auto& first = file->valves[0];
-  EXPECT_EQ(first.serial, 123456u);
-  EXPECT_EQ(first.start_degrees, 45.0);
-  EXPECT_EQ(first.opening_direction, codec::Rotation::kCounterclockwise);
-  EXPECT_EQ(first.part_number, 4711u);
-  EXPECT_EQ(first.application_version, (codec::SoftwareVersion{1, 2, 'e'}));
-  EXPECT_EQ(first.bootloader_version, (codec::SoftwareVersion{0, 9, 0}));
-  EXPECT_EQ(first.volts, 12.6);
-  EXPECT_EQ(first.valve_temperature_c, 31);
-  EXPECT_EQ(first.sensor_temperature_c, -2);
-  EXPECT_EQ(first.running_amps, 0.85);
-  EXPECT_EQ(first.bit_rate, codec::kBitRate500k);
-  EXPECT_EQ(first.errors, (std::vector<InjectedError>{{ErrorKind::kHighTemperature, 95, 85}}));
-  ASSERT_EQ(file->hotplug.size(), 1u);
-  EXPECT_EQ(file->hotplug[0].serial, 100u);
-  EXPECT_EQ(file->errors,
-            (std::vector<SerialError>{
-                {123457, {ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose}}}));
-}
-
-TEST(SimSetup, AnEmptyFileIsNoSettings) {
-  const auto file = parse_config("", "empty.yaml");
-  ASSERT_TRUE(file);
-  EXPECT_TRUE(file->valves.empty());
-}
-
-TEST(SimSetup, FileMistakesAreRefusedWithTheLine) {
-  const auto reason = [](const std::string& text) {
-    const auto file = parse_config(text, "sim.yaml");
-    EXPECT_FALSE(file) << text;
-    return file ? std::string() : file.error().reason;
-  };
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    dsp: 90\n"),
-                       "sim.yaml:3: valves[0]: unknown key 'dsp'"));
-  EXPECT_TRUE(mentions(reason("valve: []\n"), "unknown key 'valve'"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - dps: 90\n"), "needs a serial"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  dps: fast\n"), "'fast' is not a number"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  opening_direction: left\n"), "neither clockwise"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  bit_rate: 1M\n"), "neither 250000"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  valve_temperature: 200\n"), "-127 to 127"));
-  EXPECT_TRUE(mentions(reason("errors:\n  - {kind: high-voltage, value: 1, limit: 2}\n"),
-                       "needs a serial"));
-  EXPECT_TRUE(mentions(reason("errors:\n  - {serial: 1, kind: x, value: 1, limit: 2}\n"),
-                       "unknown error kind 'x'"));
-  EXPECT_TRUE(mentions(reason("defaults: [1, 2]\n"), "expected a mapping"));
-  EXPECT_TRUE(mentions(reason("defaults: {dps: [1\n"), "sim.yaml"));  // YAML syntax error
-}
-
-TEST(SimSetup, MissingFileIsReported) {
-  const auto file = load_config("/nonexistent/teejet-sim.yaml");
-  ASSERT_FALSE(file);
-  EXPECT_TRUE(mentions(file.error().reason, "/nonexistent/teejet-sim.yaml"));
 }
 
 // ---- Composition ---------------------------------------------------------------------------

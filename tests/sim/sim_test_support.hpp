@@ -16,10 +16,17 @@ namespace teejet::sim::testing {
 
 using namespace std::chrono_literals;
 
-inline constexpr Timestamp kT0 = std::chrono::seconds(1'700'000'000);
+// Power-up on the steady clock, which times everything. The wall clock, which only stamps frames,
+// reads something else entirely at that instant, so that a mix-up of the two shows.
+inline constexpr SteadyTime kT0{std::chrono::seconds(5'000)};
+inline constexpr Timestamp kWallT0{std::chrono::seconds(1'700'000'000)};
 
 // kT0 + milliseconds.
-constexpr Timestamp at_ms(long long ms) { return kT0 + std::chrono::milliseconds(ms); }
+constexpr SteadyTime at_ms(long long ms) { return kT0 + std::chrono::milliseconds(ms); }
+
+// What the wall clock of a ManualClock(kWallT0, kT0) reads at steady time `t`, as long as only
+// advance() has moved it.
+constexpr Timestamp wall_at(SteadyTime t) { return kWallT0 + (t - kT0); }
 
 // The only message of `messages`, which must be a T.
 template <class T>
@@ -33,7 +40,7 @@ T only(const std::vector<codec::FromValveMessage>& messages) {
 }
 
 // The position the valve reports, in degrees (tenths resolution), at `now`.
-inline double reported_position(SimulatedValve& valve, Timestamp now) {
+inline double reported_position(SimulatedValve& valve, SteadyTime now) {
   return only<codec::Position>(valve.handle(codec::RequestPosition{0}, now)).degrees;
 }
 

@@ -1,5 +1,6 @@
 // The Simulator runtime end to end on a VirtualBus: a controller endpoint sends real frames and
-// reads the replies. Time is a ManualClock; every wait is for a condition, with a deadline.
+// reads the replies. Time is a ManualClock; every wait is for a condition, with a deadline. No
+// test measures how long anything takes: speed belongs to the benchmarks.
 
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ostream_sink.h>
@@ -25,15 +26,22 @@ constexpr auto kDeadline = std::chrono::seconds(5);
 struct Received {
   std::uint8_t address;
   codec::FromValveMessage message;
+  Timestamp stamp;  // the controller endpoint's wall clock when the frame arrived
 };
+
+template <class T>
+bool is(const Received& received) {
+  return std::holds_alternative<T>(received.message);
+}
 
 class SimRuntime : public ::testing::Test {
  protected:
   std::string bus_name =
       std::string("sim-") + ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  std::shared_ptr<can::ManualClock> clock = std::make_shared<can::ManualClock>(kT0);
+  std::shared_ptr<ManualClock> clock = std::make_shared<ManualClock>(kWallT0, kT0);
   can::VirtualBus controller{bus_name, {.filters = can::controller_side_filters(), .clock = clock}};
   std::unique_ptr<Simulator> simulator;
+  can::VirtualBus* simulator_bus = nullptr;  // owned by `simulator`
 
   void SetUp() override { ASSERT_TRUE(controller.open()); }
   void TearDown() override {
@@ -49,12 +57,12 @@ class SimRuntime : public ::testing::Test {
   }
 
   void start(SimulatorOptions options) {
-    simulator = std::make_unique<Simulator>(
-        std::make_unique<can::VirtualBus>(
-            bus_name, can::VirtualBusOptions{.filters = can::valve_side_filters(), .clock = clock}),
-        std::move(options));
+    auto bus = std::make_unique<can::VirtualBus>(
+        bus_name, can::VirtualBusOptions{.filters = can::valve_side_filters(), .clock = clock});
+    simulator_bus = bus.get();
+    simulator = std::make_unique<Simulator>(std::move(bus), std::move(options));
     const auto started = simulator->start();
-    ASSERT_TRUE(started) << started.reason();
+    ASSERT_TRUE(started) << started.error().reason;
   }
 
   void send(std::uint8_t address, const codec::ToValveMessage& message) {
@@ -79,7 +87,7 @@ class SimRuntime : public ::testing::Test {
     EXPECT_TRUE(decoded) << decoded.error().reason;
     if (!decoded) return std::nullopt;
     return Received{decoded->route.valve_address,
-                    std::get<codec::FromValveMessage>(decoded->message)};
+                    std::get<codec::FromValveMessage>(decoded->message), frame->received};
   }
 
   // Frames up to and including the first one that matches; fails after the deadline.
@@ -107,6 +115,19 @@ class SimRuntime : public ::testing::Test {
     return std::get<T>(seen.back().message);
   }
 
+  // Moves the clock to just before `due`, sees that the simulator has acted on that moment
+  // without resending the position, then moves it onto `due` and expects the resend, stamped
+  // `stamp` by the controller's endpoint as it arrives. (The clock stands still meanwhile.)
+  void position_resent_exactly_at(SteadyTime due, Timestamp stamp) {
+    clock->advance(due - std::chrono::nanoseconds(1) - clock->steady());
+    for (const auto& r : drain(0xD8)) EXPECT_FALSE(is<codec::Position>(r)) << "sent early";
+    clock->advance(std::chrono::nanoseconds(1));
+    const auto seen = until([](const Received& r) { return is<codec::Position>(r); });
+    ASSERT_FALSE(seen.empty());
+    EXPECT_EQ(seen.back().stamp, stamp);
+    EXPECT_EQ(seen.back().address, 0xD8);
+  }
+
   // Every frame the simulator sends until it has acted on all that happened before (two round
   // trips: the replies of one loop turn are sent together).
   std::vector<Received> drain(std::uint8_t address) {
@@ -123,11 +144,6 @@ class SimRuntime : public ::testing::Test {
   }
 };
 
-template <class T>
-bool is(const Received& received) {
-  return std::holds_alternative<T>(received.message);
-}
-
 TEST_F(SimRuntime, ValvesAnnounceThemselvesAtTheirAddressesOnceASecond) {
   start(options_for({valve_with(200), valve_with(100)}));
   auto first = next();
@@ -139,7 +155,7 @@ TEST_F(SimRuntime, ValvesAnnounceThemselvesAtTheirAddressesOnceASecond) {
   ASSERT_TRUE(second);
   EXPECT_EQ(second->address, 0xD9);
   EXPECT_EQ(second->message, (codec::FromValveMessage{codec::IAmHere{0, 200, false}}));
-  EXPECT_FALSE(next(std::chrono::milliseconds(30)));  // nothing more until a second has passed
+  for (const auto& r : drain(0xD8)) EXPECT_FALSE(is<codec::IAmHere>(r));  // not before a second
   clock->advance(std::chrono::seconds(1) - kIAmHereStagger);
   auto again = next();
   ASSERT_TRUE(again);
@@ -277,19 +293,21 @@ TEST_F(SimRuntime, VerboseLogsEveryFrameDecoded) {
 
 TEST(SimDescribeFrame, CandumpTextThenTheDecodedMessageOrWhyNot) {
   const auto frame = codec::encode(0xD9, codec::RunCurrent{0.25, 1.5}).value();
-  EXPECT_EQ(describe_frame(kT0 + std::chrono::microseconds(123), "vcan0", frame),
+  EXPECT_EQ(describe_frame(kWallT0 + std::chrono::microseconds(123), "vcan0", frame),
             "(1700000000.000123) vcan0 18EFD5D9#0500190096FFFFFF  0xD9 run_current amps=0.25 "
             "last_running_amps=1.5");
   const codec::CanFrame foreign{.id = 0x18FEF100, .dlc = 1};
   EXPECT_EQ(
-      describe_frame(kT0, "can0", foreign).rfind("(1700000000.000000) can0 18FEF100#00  (", 0), 0u);
+      describe_frame(kWallT0, "can0", foreign).rfind("(1700000000.000000) can0 18FEF100#00  (", 0),
+      0u);
 }
 
 TEST_F(SimRuntime, StartFailsVisiblyWhenTheBusCannotOpenOrTheBankIsBad) {
   Simulator unnamed(std::make_unique<can::VirtualBus>(""), options_for({valve_with(1)}));
   const auto refused = unnamed.start();
   EXPECT_FALSE(refused);
-  EXPECT_NE(refused.reason().find("cannot open"), std::string::npos) << refused.reason();
+  EXPECT_NE(refused.error().reason.find("cannot open"), std::string::npos)
+      << refused.error().reason;
   EXPECT_FALSE(unnamed.started());
 
   Simulator empty(std::make_unique<can::VirtualBus>(bus_name), options_for({}));
@@ -300,38 +318,92 @@ TEST_F(SimRuntime, StartFailsVisiblyWhenTheBusCannotOpenOrTheBankIsBad) {
   EXPECT_FALSE(wrong_serial.start());
 }
 
-TEST_F(SimRuntime, StopsPromptlyAndClosesTheBus) {
+TEST_F(SimRuntime, EachResendIsSentAtItsDueTimeAndNotBefore) {
   start(options_for({valve_with(1)}));
-  const auto begin = std::chrono::steady_clock::now();
-  simulator->stop();
-  EXPECT_LT(std::chrono::steady_clock::now() - begin, std::chrono::seconds(1));
-  EXPECT_FALSE(simulator->started());
-  simulator->stop();  // idempotent
+  const SteadyTime requested = clock->steady();
+  send(0xD8, codec::RequestPosition{1});
+  const auto answer = until([](const Received& r) { return is<codec::Position>(r); });
+  ASSERT_FALSE(answer.empty());
+  EXPECT_EQ(answer.back().stamp, wall_at(requested));
+  for (int tenth = 1; tenth <= 10; ++tenth) {
+    const SteadyTime due = requested + tenth * kTenthOfSecond;
+    position_resent_exactly_at(due, wall_at(due));
+  }
 }
 
-// With the real clock: the thread sleeps until each resend is due, no sooner, no later.
-TEST(SimRuntimeRealTime, ResendsArriveOnTimeWithTheSystemClock) {
+// An NTP or GPS step of the wall clock shows in the stamps and nowhere else.
+TEST_F(SimRuntime, AWallClockStepMovesTheStampsButNotTheSchedule) {
+  start(options_for({valve_with(1)}));
+  const SteadyTime requested = clock->steady();
+  send(0xD8, codec::RequestPosition{1});
+  ASSERT_FALSE(until([](const Received& r) { return is<codec::Position>(r); }).empty());
+  clock->step_wall(-std::chrono::hours(1));
+  const SteadyTime first = requested + kTenthOfSecond;
+  position_resent_exactly_at(first, wall_at(first) - std::chrono::hours(1));
+  clock->step_wall(std::chrono::hours(3));
+  const SteadyTime second = requested + 2 * kTenthOfSecond;
+  position_resent_exactly_at(second, wall_at(second) + std::chrono::hours(2));
+}
+
+TEST_F(SimRuntime, StopEndsTheThreadAndClosesTheBusAndStartRunsAgain) {
+  start(options_for({valve_with(1, 12.3)}));
+  EXPECT_TRUE(simulator->started());
+  simulator->stop();
+  EXPECT_FALSE(simulator->started());
+  const auto refused = simulator_bus->send(codec::encode(0xD8, codec::Stop{}).value());
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, ErrorCode::kUnavailable) << refused.error().reason;
+  simulator->stop();  // idempotent
+  EXPECT_FALSE(simulator->started());
+
+  const auto restarted = simulator->start();
+  ASSERT_TRUE(restarted) << restarted.error().reason;
+  EXPECT_TRUE(simulator->started());
+  EXPECT_EQ(reply_of<codec::Position>(0xD8, codec::RequestPosition{0}), codec::Position{12.3});
+}
+
+TEST(SimReceiveTimeout, WaitsUntilTheNextEventRoundedUpAndAtMostMaxWait) {
+  using std::chrono::milliseconds;
+  using std::chrono::nanoseconds;
+  const milliseconds max_wait(50);
+  EXPECT_EQ(receive_timeout(std::nullopt, kT0, max_wait), max_wait);
+  EXPECT_EQ(receive_timeout(kT0 + milliseconds(37), kT0, max_wait), milliseconds(37));
+  EXPECT_EQ(receive_timeout(kT0 + milliseconds(37) + nanoseconds(1), kT0, max_wait),
+            milliseconds(38));  // never wakes before the event
+  EXPECT_EQ(receive_timeout(kT0 + nanoseconds(1), kT0, max_wait), milliseconds(1));
+  EXPECT_EQ(receive_timeout(kT0, kT0, max_wait), milliseconds(0));
+  EXPECT_EQ(receive_timeout(kT0 - std::chrono::seconds(1), kT0, max_wait), milliseconds(0));
+  EXPECT_EQ(receive_timeout(kT0 + milliseconds(50), kT0, max_wait), max_wait);
+  EXPECT_EQ(receive_timeout(kT0 + std::chrono::hours(24 * 365), kT0, max_wait), max_wait);
+}
+
+// With the real clocks, nobody moves time and nobody sends: the thread wakes for each resend on
+// its own. Counts and values only; how punctually is the benchmarks' business.
+TEST(SimRuntimeRealTime, ResendsComeOnTheirOwnWithTheSystemClock) {
   const std::string name = "sim-real-time";
   can::VirtualBus controller(name, {.filters = can::controller_side_filters()});
   ASSERT_TRUE(controller.open());
   SimulatorOptions options;
-  options.valves = {valve_with(1)};
+  options.valves = {valve_with(1, 33.3)};
   Simulator simulator(std::make_unique<can::VirtualBus>(
                           name, can::VirtualBusOptions{.filters = can::valve_side_filters()}),
                       options);
   ASSERT_TRUE(simulator.start());
   ASSERT_TRUE(controller.send(codec::encode(0xD8, codec::RequestPosition{1}).value()));
-  std::vector<can::Timestamp> stamps;
+  int positions = 0;
   const auto deadline = std::chrono::steady_clock::now() + kDeadline;
-  while (stamps.size() < 11 && std::chrono::steady_clock::now() < deadline) {
+  while (positions < 11 && std::chrono::steady_clock::now() < deadline) {
     const auto frame = controller.receive(std::chrono::milliseconds(500));
-    if (frame && codec::decode(frame->frame) && frame->frame.data[0] == 0x02) {  // Position
-      stamps.push_back(frame->received);
-    }
+    if (!frame) continue;
+    const auto decoded = codec::decode(frame->frame);
+    ASSERT_TRUE(decoded) << decoded.error().reason;
+    const auto& message = std::get<codec::FromValveMessage>(decoded->message);
+    if (!std::holds_alternative<codec::Position>(message)) continue;
+    EXPECT_EQ(decoded->route.valve_address, 0xD8);
+    EXPECT_EQ(std::get<codec::Position>(message), codec::Position{33.3});
+    ++positions;
   }
-  ASSERT_EQ(stamps.size(), 11u);
-  const auto span = std::chrono::duration<double>(stamps.back() - stamps.front()).count();
-  EXPECT_NEAR(span, 1.0, 0.15);  // ten periods of 0.1 s; generous for a loaded machine
+  EXPECT_EQ(positions, 11);  // the answer and ten resends
 }
 
 }  // namespace

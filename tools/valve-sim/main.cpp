@@ -11,9 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "config_file.hpp"
+#include "setup.hpp"
 #include "teejet/can/open_bus.hpp"
 #include "teejet/codec/codec.hpp"
-#include "teejet/sim/setup.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace {
@@ -75,12 +76,12 @@ void add_valve(sim::Simulator& simulator, const sim::Setup& setup,
     config.serial = *serial;
   }
   if (const auto added = simulator.add_valve(config); !added) {
-    logger.error("SIGUSR1: no valve added: {}", added.reason());
+    logger.error("SIGUSR1: no valve added: {}", added.error().reason);
     return;
   }
   for (const auto& error : errors) {
     if (const auto injected = simulator.inject_error(config.serial, error); !injected) {
-      logger.error("{}", injected.reason());
+      logger.error("{}", injected.error().reason);
     }
   }
 }
@@ -207,7 +208,7 @@ int main(int argc, char** argv) {
   sim::Simulator simulator(teejet::can::make_bus(can_spec, teejet::can::valve_side_filters()),
                            std::move(options));
   if (const auto started = simulator.start(); !started) {
-    std::cerr << "valve-sim: " << started.reason() << '\n';
+    std::cerr << "valve-sim: " << started.error().reason << '\n';
     return kExitBus;
   }
   logger->info("simulating {} valve(s) on {}; SIGUSR1 adds one, SIGINT/SIGTERM stop",

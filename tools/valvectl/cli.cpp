@@ -1,12 +1,14 @@
 #include "cli.hpp"
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cmath>
 #include <sstream>
 
 #include "exit_codes.hpp"
 #include "names.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/dds/conversions.hpp"
 
 namespace teejet::valvectl {
 namespace {
@@ -21,21 +23,17 @@ command; 4 the command timed out, or no status arrived in time; 5 a newer comman
 64 invalid arguments (nothing was sent); 1 anything else (DDS could not be set up, ...).
 See docs/valvectl.md.)";
 
-constexpr double kMaxDegrees = 359.9;
-constexpr int kMaxSpeedPercent = 100;
-constexpr long long kMaxMilliseconds = 65535;
-constexpr int kMaxResendTenths = 255;
-
-// Everything any subcommand can take, as typed; checked and converted by build_invocation().
+// Everything any subcommand can take, as typed; checked by the codec in build_invocation().
+// Unsigned where the wire is: CLI11 refuses a negative number or one that does not fit.
 struct RawArguments {
   std::string serial;
   std::string what;
   double degrees = 0.0;
-  int speed = kMaxSpeedPercent;
+  unsigned speed = 100;
   std::string direction = "open";
-  long long milliseconds = 0;
-  int every_tenths = 0;
-  long long bit_rate = 0;
+  unsigned milliseconds = 0;
+  unsigned every_tenths = 0;
+  std::uint32_t bit_rate = 0;
   bool all = false;
   bool baud_request = false;
   bool wait = false;
@@ -191,13 +189,6 @@ std::uint32_t checked_serial(const std::string& text) {
   return *serial;
 }
 
-std::uint8_t checked_speed(int speed) {
-  if (speed < 0 || speed > kMaxSpeedPercent) {
-    usage_error("--speed " + std::to_string(speed) + " is outside 0 to 100 %");
-  }
-  return static_cast<std::uint8_t>(speed);
-}
-
 Direction checked_direction(const std::string& word, bool allow_shortest) {
   const auto direction = parse_direction(word, allow_shortest);
   if (!direction) {
@@ -207,14 +198,50 @@ Direction checked_direction(const std::string& word, bool allow_shortest) {
   return *direction;
 }
 
-float checked_degrees(double degrees) {
-  // The wire has 0.1 degree resolution; compare in tenths so 359.9 itself is accepted.
-  if (!std::isfinite(degrees) || degrees < 0.0 || std::round(degrees * 10.0) > kMaxDegrees * 10.0) {
-    std::ostringstream text;
-    text << "--to " << degrees << " is outside 0 to 359.9 degrees";
-    usage_error(text.str());
+codec::Direction drive_direction(const std::string& word) {
+  return checked_direction(word, /*allow_shortest=*/false) == DIRECTION_OPEN
+             ? codec::Direction::kOpen
+             : codec::Direction::kClose;
+}
+
+codec::TargetDirection target_direction(const std::string& word) {
+  switch (checked_direction(word, /*allow_shortest=*/true)) {
+    case DIRECTION_OPEN:
+      return codec::TargetDirection::kOpen;
+    case DIRECTION_CLOSE:
+      return codec::TargetDirection::kClose;
+    case DIRECTION_SHORTEST:
+      break;
   }
-  return static_cast<float>(degrees);
+  return codec::TargetDirection::kShortest;
+}
+
+// The options that carry each field of the protocol's messages.
+constexpr std::array<std::pair<std::string_view, std::string_view>, 5> kOptionOfField{{
+    {"speed_percent", "--speed"},
+    {"degrees", "--to"},
+    {"milliseconds", "--ms"},
+    {"resend_tenths", "--every"},
+    {"bit_rate", "--set"},
+}};
+
+// The command for `message`, once the codec has checked every value against the sheet, as the
+// gateway will. The codec names the message and the field ("manual: speed_percent 101 is
+// outside 0 to 100"); the person typed an option, so the message names that instead.
+ValveCommand checked(const codec::ToValveMessage& message) {
+  const auto frame = codec::encode(codec::kFirstValveAddress, message);
+  if (frame) return dds::to_command(message);
+  std::string reason = frame.error().reason;
+  if (const auto after_name = reason.find(": "); after_name != std::string::npos) {
+    reason.erase(0, after_name + 2);
+  }
+  for (const auto& [field, option] : kOptionOfField) {
+    if (reason.starts_with(std::string(field) + " ")) {
+      reason.replace(0, field.size(), option);
+      break;
+    }
+  }
+  usage_error(reason);
 }
 
 void build_command(Parser& parser, CLI::App* used) {
@@ -232,59 +259,45 @@ void build_command(Parser& parser, CLI::App* used) {
   if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
 
   if (used == parser.move) {
-    command.kind(COMMAND_TARGET_DEGREES);
-    command.degrees(checked_degrees(raw.degrees));
-    command.speed_percent(checked_speed(raw.speed));
-    command.direction(checked_direction(raw.direction, /*allow_shortest=*/true));
+    command =
+        checked(codec::TargetDegrees{raw.speed, target_direction(raw.direction), raw.degrees});
   } else if (used == parser.stop) {
-    command.kind(COMMAND_STOP);
+    command = checked(codec::Stop{});
   } else if (used == parser.manual) {
-    command.kind(COMMAND_MANUAL);
-    command.speed_percent(checked_speed(raw.speed));
-    command.direction(checked_direction(raw.direction, /*allow_shortest=*/false));
+    command = checked(codec::Manual{raw.speed, drive_direction(raw.direction)});
   } else if (used == parser.jog) {
-    command.kind(COMMAND_MILLISECONDS_TO_RUN);
-    if (raw.milliseconds < 0 || raw.milliseconds > kMaxMilliseconds) {
-      usage_error("--ms " + std::to_string(raw.milliseconds) + " is outside 0 to 65535");
-    }
-    command.milliseconds(static_cast<std::uint16_t>(raw.milliseconds));
-    command.speed_percent(checked_speed(raw.speed));
-    command.direction(checked_direction(raw.direction, /*allow_shortest=*/false));
+    command = checked(
+        codec::MillisecondsToRun{raw.speed, drive_direction(raw.direction), raw.milliseconds});
     // The run itself may take longer than the default backstop.
     if (parser.wait_timeout->count() == 0) {
       request.wait_timeout += std::chrono::milliseconds(raw.milliseconds);
     }
   } else if (used == parser.clear_errors) {
-    command.kind(COMMAND_CLEAR_ERRORS);
+    command = checked(codec::ClearErrors{});
   } else if (used == parser.request) {
-    command.kind(COMMAND_REQUEST);
     const auto telemetry = parse_telemetry(raw.what);
     if (!telemetry) {
       usage_error("request: '" + raw.what +
                   "' is not one of version position temperature voltage current dps speed "
                   "run-time cycle-counts");
     }
-    if (raw.every_tenths < 0 || raw.every_tenths > kMaxResendTenths) {
-      usage_error("--every " + std::to_string(raw.every_tenths) +
-                  " is outside 0 to 255 tenths of a second");
-    }
     if (*telemetry == TELEMETRY_VERSION && raw.every_tenths != 0) {
       usage_error("request version: a valve sends its version once; --every is not allowed");
     }
-    command.telemetry(*telemetry);
-    command.resend_tenths(static_cast<std::uint8_t>(raw.every_tenths));
+    // Every request of the sheet has the same period field: the codec checks it on one.
+    (void)checked(codec::RequestPosition{raw.every_tenths});
+    ValveCommand asked;
+    asked.kind(COMMAND_REQUEST);
+    asked.telemetry(*telemetry);
+    asked.resend_tenths(static_cast<std::uint8_t>(raw.every_tenths));
+    const auto message = dds::to_message(asked);
+    if (!message) usage_error(message.error().reason);
+    command = checked(*message);
   } else if (used == parser.baud) {
     const bool set = parser.bit_rate->count() > 0;
     if (set == raw.baud_request) usage_error("baud: give either --request or --set RATE");
-    if (set) {
-      if (raw.bit_rate != codec::kBitRate250k && raw.bit_rate != codec::kBitRate500k) {
-        usage_error("--set " + std::to_string(raw.bit_rate) + " is not 250000 or 500000");
-      }
-      command.kind(COMMAND_SET_BAUD_RATE);
-      command.bit_rate(static_cast<std::uint32_t>(raw.bit_rate));
-    } else {
-      command.kind(COMMAND_REQUEST_BAUD_RATE);
-    }
+    command = checked(set ? codec::BaudRate{codec::BaudAction::kSet, raw.bit_rate}
+                          : codec::BaudRate{codec::BaudAction::kRequest, codec::kBitRate250k});
   }
 }
 

@@ -58,27 +58,28 @@ std::string default_origin() {
 }
 
 CommandClient::CommandClient(dds::Participant& participant, std::string origin)
-    : participant_(participant), origin_(std::move(origin)), next_id_(random_first_id()) {
-  status_reader_ =
-      participant_.reader(participant_.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus),
-                          dds::topics::status_reader_qos(), nullptr);
-  status_reader_->set_listener(this, eprosima::fastdds::dds::StatusMask::data_available());
+    : participant_(participant), origin_(std::move(origin)), next_id_(random_first_id()) {}
+
+Result<std::unique_ptr<CommandClient>> CommandClient::create(dds::Participant& participant,
+                                                             std::string origin) {
+  std::unique_ptr<CommandClient> client(new CommandClient(participant, std::move(origin)));
+  auto topic = participant.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus);
+  if (!topic) return topic.error();
+  auto reader = participant.reader(*topic, dds::topics::status_reader_qos(), client.get(),
+                                   eprosima::fastdds::dds::StatusMask::data_available());
+  if (!reader) return reader.error();
+  client->status_reader_ = *reader;
+  return client;
 }
 
 CommandClient::~CommandClient() {
   // The participant outlives this client: delete the reader while its listener still exists.
-  status_reader_->set_listener(nullptr);
-  // Fast DDS 2.9 hands out the owning subscriber and publisher as const only.
-  const_cast<eprosima::fastdds::dds::Subscriber*>(status_reader_->get_subscriber())
-      ->delete_datareader(status_reader_);
-  if (command_writer_ != nullptr) {
-    const_cast<eprosima::fastdds::dds::Publisher*>(command_writer_->get_publisher())
-        ->delete_datawriter(command_writer_);
-  }
+  participant_.delete_reader(status_reader_);
+  participant_.delete_writer(command_writer_);
 }
 
-bool CommandClient::connect(std::size_t gateways, Deadline until,
-                            const std::atomic<bool>& interrupted) {
+Result<bool> CommandClient::connect(std::size_t gateways, Deadline until,
+                                    const std::atomic<bool>& interrupted) {
   const std::size_t wanted = std::max<std::size_t>(gateways, 1);
   const bool reader_matched = wait_for_match(
       [this] {
@@ -89,9 +90,11 @@ bool CommandClient::connect(std::size_t gateways, Deadline until,
       wanted, until, interrupted);
   if (!reader_matched) return false;
   if (command_writer_ == nullptr) {
-    command_writer_ =
-        participant_.writer(participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand),
-                            dds::topics::command_writer_qos());
+    auto topic = participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand);
+    if (!topic) return topic.error();
+    auto writer = participant_.writer(*topic, dds::topics::command_writer_qos());
+    if (!writer) return writer.error();
+    command_writer_ = *writer;
   }
   // Commands are VOLATILE: one written before the gateway's reader matched would be lost.
   return wait_for_match(

@@ -11,6 +11,7 @@
 #include <deque>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -26,7 +27,8 @@ std::string default_origin();
 class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
  public:
   // Subscribes to command status at once; the command writer is created by connect().
-  CommandClient(dds::Participant& participant, std::string origin);  // throws dds::DdsError
+  static Result<std::unique_ptr<CommandClient>> create(dds::Participant& participant,
+                                                       std::string origin);
   ~CommandClient() override;
   CommandClient(const CommandClient&) = delete;
   CommandClient& operator=(const CommandClient&) = delete;
@@ -35,8 +37,9 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   // command writer and waits until they match it too. Status is VOLATILE, so a status written
   // before the gateway knows this reader would be lost: announcing the writer only after the
   // reader has matched gives the gateway a discovery round-trip to learn of the reader first.
-  // Returns false when not even one gateway matched both by `until` or when interrupted.
-  bool connect(std::size_t gateways, Deadline until, const std::atomic<bool>& interrupted);
+  // False when not even one gateway matched both by `until` or when interrupted; an Error when
+  // DDS refused the writer.
+  Result<bool> connect(std::size_t gateways, Deadline until, const std::atomic<bool>& interrupted);
 
   // Writes `command` with a fresh command_id and this client's origin; returns the id, or
   // nullopt when the write failed. Requires connect().
@@ -51,6 +54,8 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
 
  private:
+  CommandClient(dds::Participant& participant, std::string origin);
+
   dds::Participant& participant_;
   const std::string origin_;
   eprosima::fastdds::dds::DataReader* status_reader_ = nullptr;

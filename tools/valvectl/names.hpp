@@ -1,12 +1,12 @@
 #pragma once
 
-// The words valvectl uses for the IDL's enumerations, on its command line and in its output.
-// Output names are snake_case like the gateway's own (bridge::to_string), so that text, JSON and
-// the gateway's logs agree.
+// The words valvectl's command line uses for the IDL's enumerations. Output uses the contract's
+// own names (teejet/dds/names.hpp), so that text, JSON and the gateway's logs agree.
 
 #include <optional>
 #include <string_view>
 
+#include "teejet/dds/names.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::valvectl {
@@ -18,9 +18,7 @@ std::string_view telemetry_word(Telemetry telemetry);  // the command-line word,
 
 // "open", "close" and, where `allow_shortest`, "shortest".
 std::optional<Direction> parse_direction(std::string_view word, bool allow_shortest);
-std::string_view to_string(Direction direction);
 
-std::string_view to_string(ErrorKind kind);  // "high_voltage", ..., "min_degrees_per_second"
-std::string_view to_string(BusState state);  // "error_active", ..., "bus_off", "down"
+using dds::to_string;
 
 }  // namespace teejet::valvectl

@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "names.hpp"
-#include "teejet/bridge/conversions.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/dds/names.hpp"
 
 namespace teejet::valvectl {
 namespace {
@@ -133,9 +133,10 @@ nlohmann::json to_json(const std::vector<ValveRow>& rows) {
 }
 
 std::string status_text(const CommandStatus& status) {
-  std::string text = codec::format_serial(status.serial()) + ' ' +
-                     bridge::to_string(status.kind()) + " #" + std::to_string(status.command_id()) +
-                     ": " + upper(bridge::to_string(status.state()));
+  std::string text = codec::format_serial(status.serial()) + ' ';
+  text += dds::to_string(status.kind());
+  text += " #" + std::to_string(status.command_id()) + ": ";
+  text += upper(std::string(dds::to_string(status.state())));
   if (status.reason().size() > 0) text += ": " + status.reason().to_string();
   return text;
 }
@@ -146,8 +147,8 @@ nlohmann::json status_json(const CommandStatus& status) {
       {"serial", codec::format_serial(status.serial())},
       {"command_id", status.command_id()},
       {"origin", status.origin().to_string()},
-      {"kind", bridge::to_string(status.kind())},
-      {"state", bridge::to_string(status.state())},
+      {"kind", dds::to_string(status.kind())},
+      {"state", dds::to_string(status.state())},
       {"reason", status.reason().to_string()},
       {"stamp_ns", status.stamp_ns()},
   };

@@ -51,13 +51,18 @@ std::string seconds_text(milliseconds duration) {
 
 class Session {
  public:
-  Session(const Invocation& invocation, const Terminal& terminal)
-      : invocation_(invocation),
-        terminal_(terminal),
-        participant_({.domain = invocation.global.domain,
-                      .profile_file = invocation.global.profile_file,
-                      .name = "valvectl"}),
-        view_(participant_) {}
+  // Joins the domain and subscribes; an Error says what DDS refused.
+  static Result<std::unique_ptr<Session>> create(const Invocation& invocation,
+                                                 const Terminal& terminal) {
+    auto participant = dds::Participant::create({.domain = invocation.global.domain,
+                                                 .profile_file = invocation.global.profile_file,
+                                                 .name = "valvectl"});
+    if (!participant) return participant.error();
+    auto view = ValveView::create(**participant);
+    if (!view) return view.error();
+    return std::unique_ptr<Session>(
+        new Session(invocation, terminal, std::move(*participant), std::move(*view)));
+  }
 
   int run() {
     switch (invocation_.subcommand) {
@@ -219,8 +224,19 @@ class Session {
     for (const std::uint32_t serial : serials) gateways.insert(table.row(serial)->gateway);
     const std::size_t expected_gateways = std::max(gateways.size(), table.gateways().size());
 
-    CommandClient client(participant_, default_origin());
-    if (!client.connect(expected_gateways, after_timeout(), terminal_.interrupted)) {
+    auto made = CommandClient::create(*participant_, default_origin());
+    if (!made) {
+      complain(made.error().reason);
+      return kExitFailure;
+    }
+    CommandClient& client = **made;
+    const auto connected =
+        client.connect(expected_gateways, after_timeout(), terminal_.interrupted);
+    if (!connected) {
+      complain(connected.error().reason);
+      return kExitFailure;
+    }
+    if (!*connected) {
       if (terminal_.interrupted) return kExitInterrupted;
       complain("no gateway on " + domain_text() + " subscribes to commands");
       return kExitNotFound;
@@ -321,22 +337,30 @@ class Session {
     emit(reply_text(serial, *name, reply), reply_json(serial, *name, reply));
   }
 
+  Session(const Invocation& invocation, const Terminal& terminal,
+          std::unique_ptr<dds::Participant> participant, std::unique_ptr<ValveView> view)
+      : invocation_(invocation),
+        terminal_(terminal),
+        participant_(std::move(participant)),
+        view_owner_(std::move(view)),
+        view_(*view_owner_) {}
+
   const Invocation& invocation_;
   const Terminal& terminal_;
-  dds::Participant participant_;
-  ValveView view_;
+  std::unique_ptr<dds::Participant> participant_;
+  std::unique_ptr<ValveView> view_owner_;  // destroyed before the participant: its readers go first
+  ValveView& view_;
 };
 
 }  // namespace
 
 int run(const Invocation& invocation, const Terminal& terminal) {
-  try {
-    Session session(invocation, terminal);
-    return session.run();
-  } catch (const dds::DdsError& error) {
-    terminal.err << "valvectl: " << error.what() << '\n';
+  auto session = Session::create(invocation, terminal);
+  if (!session) {
+    terminal.err << "valvectl: " << session.error().reason << '\n';
     return kExitFailure;
   }
+  return (*session)->run();
 }
 
 }  // namespace teejet::valvectl

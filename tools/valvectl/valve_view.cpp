@@ -34,12 +34,28 @@ std::string rotation_text(Rotation rotation) {
 
 }  // namespace
 
-template <class PubSubType, class Sample>
-ValveView::Reader ValveView::subscribe(dds::Participant& participant, const char* topic,
-                                       std::function<void(const Sample&)> on_sample) {
-  // No listener yet: the constructor attaches them once handlers_ is complete.
-  Reader reader = participant.reader(participant.topic<PubSubType>(topic),
-                                     dds::topics::state_reader_qos(), nullptr);
+ValveView::Reader ValveView::reader_of(const char* topic_name,
+                                       Result<eprosima::fastdds::dds::Topic*> topic) {
+  if (failure_) return nullptr;
+  if (!topic) {
+    failure_ = topic.error();
+    return nullptr;
+  }
+  // No listener yet: create() attaches them once handlers_ is complete.
+  auto reader = participant_.reader(*topic, dds::topics::state_reader_qos());
+  if (!reader) {
+    failure_ = Error{reader.error().code, reader.error().reason + " (" + topic_name + ")"};
+    return nullptr;
+  }
+  return *reader;
+}
+
+template <class Sample>
+ValveView::Reader ValveView::subscribe(std::function<void(const Sample&)> on_sample) {
+  using Topic = dds::topics::TopicOf<Sample>;
+  Reader reader =
+      reader_of(Topic::kName, participant_.topic<typename Topic::PubSubType>(Topic::kName));
+  if (reader == nullptr) return nullptr;
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
     // taking with mutex_ held would invert the lock order against a listener thread.
@@ -57,91 +73,79 @@ ValveView::Reader ValveView::subscribe(dds::Participant& participant, const char
   return reader;
 }
 
-ValveView::ValveView(dds::Participant& participant) {
-  subscribe<ValvePresencePubSubType, ValvePresence>(
-      participant, dds::topics::kPresence,
-      [this](const ValvePresence& sample) { table_.on_presence(sample); });
-  gateway_status_reader_ = subscribe<GatewayStatusPubSubType, GatewayStatus>(
-      participant, dds::topics::kGatewayStatus,
-      [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
-  subscribe<ValvePositionPubSubType, ValvePosition>(
-      participant, dds::topics::kPosition, [this](const ValvePosition& sample) {
-        table_.on_position(sample.serial(), rounded(sample.degrees(), 0.1), sample.received_ns());
-      });
-  subscribe<ValveTemperaturePubSubType, ValveTemperature>(
-      participant, dds::topics::kTemperature, [this](const ValveTemperature& sample) {
-        table_.on_temperature(sample.serial(), sample.valve_c(), sample.sensor_c(),
-                              sample.received_ns());
-      });
-  subscribe<ValveVoltagePubSubType, ValveVoltage>(
-      participant, dds::topics::kVoltage, [this](const ValveVoltage& sample) {
-        table_.on_voltage(sample.serial(), rounded(sample.volts(), 0.1), sample.received_ns());
-      });
-  subscribe<ValveVersionPubSubType, ValveVersion>(
-      participant, dds::topics::kVersion, [this](const ValveVersion& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_VERSION),
-                        {sample.received_ns(),
-                         {{"application", version_text(sample.application())},
-                          {"bootloader", version_text(sample.bootloader())}}});
-      });
-  subscribe<ValveCurrentPubSubType, ValveCurrent>(
-      participant, dds::topics::kCurrent, [this](const ValveCurrent& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_CURRENT),
-                        {sample.received_ns(),
-                         {{"amps", rounded(sample.amps(), 0.01)},
-                          {"last_running_amps", rounded(sample.last_running_amps(), 0.01)}}});
-      });
-  subscribe<ValveDegreesPerSecondPubSubType, ValveDegreesPerSecond>(
-      participant, dds::topics::kDegreesPerSecond, [this](const ValveDegreesPerSecond& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_DEGREES_PER_SECOND),
-                        {sample.received_ns(),
-                         {{"dps", sample.dps()}, {"direction", to_string(sample.direction())}}});
-      });
-  subscribe<ValveSpeedDirectionPubSubType, ValveSpeedDirection>(
-      participant, dds::topics::kSpeedDirection, [this](const ValveSpeedDirection& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_SPEED_DIRECTION),
-                        {sample.received_ns(),
-                         {{"speed_percent", sample.speed_percent()},
-                          {"direction", to_string(sample.direction())},
-                          {"opening_direction", rotation_text(sample.opening_direction())}}});
-      });
-  subscribe<ValveRunTimePubSubType, ValveRunTime>(
-      participant, dds::topics::kRunTime, [this](const ValveRunTime& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_RUN_TIME),
-                        {sample.received_ns(), {{"seconds", sample.seconds()}}});
-      });
-  subscribe<ValveCycleCountPubSubType, ValveCycleCount>(
-      participant, dds::topics::kCycleCount, [this](const ValveCycleCount& sample) {
-        table_.on_reply(sample.serial(), reply_name(TELEMETRY_CYCLE_COUNTS),
-                        {sample.received_ns(), {{"count", sample.count()}}});
-      });
-  subscribe<ValveBaudRatePubSubType, ValveBaudRate>(
-      participant, dds::topics::kBaudRate, [this](const ValveBaudRate& sample) {
-        table_.on_reply(sample.serial(), kBaudRateReply,
-                        {sample.received_ns(), {{"bit_rate", sample.bit_rate()}}});
-      });
-
-  // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
-  Reader errors = participant.reader(participant.topic<ValveErrorPubSubType>(dds::topics::kError),
-                                     dds::topics::state_reader_qos(), nullptr);
-  handlers_.emplace(errors, [this](Reader from) { take_errors(from); });
-
+Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participant) {
+  std::unique_ptr<ValveView> view(new ValveView(participant));
+  if (view->failure_) return *view->failure_;
   // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
   // that arrived before a reader had its listener are taken right after.
-  for (const auto& [reader, handler] : handlers_) {
-    reader->set_listener(this, eprosima::fastdds::dds::StatusMask::data_available());
+  for (const auto& [reader, handler] : view->handlers_) {
+    reader->set_listener(view.get(), eprosima::fastdds::dds::StatusMask::data_available());
   }
-  for (const auto& [reader, handler] : handlers_) handler(reader);
+  for (const auto& [reader, handler] : view->handlers_) handler(reader);
+  return view;
+}
+
+ValveView::ValveView(dds::Participant& participant) : participant_(participant) {
+  subscribe<ValvePresence>([this](const ValvePresence& sample) { table_.on_presence(sample); });
+  gateway_status_reader_ = subscribe<GatewayStatus>(
+      [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
+  subscribe<ValvePosition>([this](const ValvePosition& sample) {
+    table_.on_position(sample.serial(), rounded(sample.degrees(), 0.1), sample.received_ns());
+  });
+  subscribe<ValveTemperature>([this](const ValveTemperature& sample) {
+    table_.on_temperature(sample.serial(), sample.valve_c(), sample.sensor_c(),
+                          sample.received_ns());
+  });
+  subscribe<ValveVoltage>([this](const ValveVoltage& sample) {
+    table_.on_voltage(sample.serial(), rounded(sample.volts(), 0.1), sample.received_ns());
+  });
+  subscribe<ValveVersion>([this](const ValveVersion& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_VERSION),
+                    {sample.received_ns(),
+                     {{"application", version_text(sample.application())},
+                      {"bootloader", version_text(sample.bootloader())}}});
+  });
+  subscribe<ValveCurrent>([this](const ValveCurrent& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_CURRENT),
+                    {sample.received_ns(),
+                     {{"amps", rounded(sample.amps(), 0.01)},
+                      {"last_running_amps", rounded(sample.last_running_amps(), 0.01)}}});
+  });
+  subscribe<ValveDegreesPerSecond>([this](const ValveDegreesPerSecond& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_DEGREES_PER_SECOND),
+                    {sample.received_ns(),
+                     {{"dps", sample.dps()}, {"direction", to_string(sample.direction())}}});
+  });
+  subscribe<ValveSpeedDirection>([this](const ValveSpeedDirection& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_SPEED_DIRECTION),
+                    {sample.received_ns(),
+                     {{"speed_percent", sample.speed_percent()},
+                      {"direction", to_string(sample.direction())},
+                      {"opening_direction", rotation_text(sample.opening_direction())}}});
+  });
+  subscribe<ValveRunTime>([this](const ValveRunTime& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_RUN_TIME),
+                    {sample.received_ns(), {{"seconds", sample.seconds()}}});
+  });
+  subscribe<ValveCycleCount>([this](const ValveCycleCount& sample) {
+    table_.on_reply(sample.serial(), reply_name(TELEMETRY_CYCLE_COUNTS),
+                    {sample.received_ns(), {{"count", sample.count()}}});
+  });
+  subscribe<ValveBaudRate>([this](const ValveBaudRate& sample) {
+    table_.on_reply(sample.serial(), kBaudRateReply,
+                    {sample.received_ns(), {{"bit_rate", sample.bit_rate()}}});
+  });
+
+  // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
+  if (Reader errors = reader_of(dds::topics::kError,
+                                participant_.topic<ValveErrorPubSubType>(dds::topics::kError))) {
+    handlers_.emplace(errors, [this](Reader from) { take_errors(from); });
+  }
 }
 
 ValveView::~ValveView() {
   // Delete the readers while this listener still exists: the participant outlives the view.
-  for (const auto& [reader, handler] : handlers_) {
-    reader->set_listener(nullptr);
-    // Fast DDS 2.9 hands out the owning subscriber as const only.
-    const_cast<eprosima::fastdds::dds::Subscriber*>(reader->get_subscriber())
-        ->delete_datareader(reader);
-  }
+  for (const auto& [reader, handler] : handlers_) participant_.delete_reader(reader);
 }
 
 void ValveView::take_errors(Reader reader) {

@@ -10,7 +10,9 @@
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -23,7 +25,8 @@ using Deadline = std::chrono::steady_clock::time_point;
 
 class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
  public:
-  explicit ValveView(dds::Participant& participant);  // throws dds::DdsError
+  // Subscribes to every durable topic; an Error names what DDS refused.
+  static Result<std::unique_ptr<ValveView>> create(dds::Participant& participant);
   ~ValveView() override;
   ValveView(const ValveView&) = delete;
   ValveView& operator=(const ValveView&) = delete;
@@ -41,15 +44,19 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
  private:
   using Reader = eprosima::fastdds::dds::DataReader*;
   using Handler = std::function<void(Reader)>;
-  template <class PubSubType, class Sample>
-  Reader subscribe(dds::Participant& participant, const char* topic,
-                   std::function<void(const Sample&)> on_sample);
+  explicit ValveView(dds::Participant& participant);
+  // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
+  template <class Sample>
+  Reader subscribe(std::function<void(const Sample&)> on_sample);
+  Reader reader_of(const char* topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
   void take_errors(Reader reader);
   // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
   // matched count: asking it with mutex_ held would invert the lock order, so this runs first
   // and stores the count in the table.
   void update_gateways_matched() const;
 
+  dds::Participant& participant_;
+  std::optional<Error> failure_;        // the first thing DDS refused while subscribing
   std::map<Reader, Handler> handlers_;  // fixed after construction
   Reader gateway_status_reader_ = nullptr;
 

@@ -3,22 +3,6 @@
 #include "teejet/codec/can_id.hpp"
 
 namespace teejet::can {
-namespace {
-
-class SystemClock final : public Clock {
- public:
-  Timestamp now() const override {
-    return std::chrono::duration_cast<Timestamp>(
-        std::chrono::system_clock::now().time_since_epoch());
-  }
-};
-
-}  // namespace
-
-std::shared_ptr<const Clock> system_clock() {
-  static const auto clock = std::make_shared<const SystemClock>();
-  return clock;
-}
 
 std::vector<Filter> controller_side_filters() {
   return {{codec::from_valve_id(0), 0xFFFFFF00}};  // 0x18EFD5xx

@@ -36,7 +36,7 @@ VirtualBus::VirtualBus(std::string bus_name, Options options)
 VirtualBus::~VirtualBus() { close(); }
 
 Status VirtualBus::open() {
-  if (name_.empty()) return Status::failure("a virtual bus needs a name");
+  if (name_.empty()) return Error{ErrorCode::kInvalidValue, "a virtual bus needs a name"};
   auto medium = medium_named(name_);
   {
     std::lock_guard lock(medium->mutex);
@@ -70,14 +70,14 @@ Status VirtualBus::send(const codec::CanFrame& frame) {
   std::shared_ptr<Medium> medium;
   {
     std::lock_guard lock(mutex_);
-    if (!open_) return Status::failure(name_ + ": bus is not open");
+    if (!open_) return Error{ErrorCode::kUnavailable, name_ + ": bus is not open"};
     medium = medium_;
   }
   std::lock_guard medium_lock(medium->mutex);
   if (!medium->link_up) {
     std::lock_guard lock(mutex_);
     ++statistics_.tx_failed;
-    return Status::failure(name_ + ": link is down", ENETDOWN);
+    return Error{ErrorCode::kUnavailable, name_ + ": link is down", ENETDOWN};
   }
   for (VirtualBus* endpoint : medium->endpoints) {
     if (endpoint != this) endpoint->deliver(frame);
@@ -102,19 +102,26 @@ void VirtualBus::deliver(const codec::CanFrame& frame) {
       ++statistics_.rx_dropped;
       return;
     }
-    queue_.push_back({frame, options_.clock->now()});
+    queue_.push_back({frame, options_.clock->wall()});
   }
   arrived_.notify_one();
 }
 
 std::optional<TimedFrame> VirtualBus::receive(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
+  ++waiting_;
   arrived_.wait_for(lock, timeout, [&] { return !queue_.empty() || !open_; });
+  --waiting_;
   if (queue_.empty() || !open_) return std::nullopt;
   TimedFrame frame = queue_.front();
   queue_.pop_front();
   ++statistics_.frames_in;
   return frame;
+}
+
+std::size_t VirtualBus::waiting_receivers() const {
+  std::lock_guard lock(mutex_);
+  return waiting_;
 }
 
 BusStatistics VirtualBus::statistics() const {

@@ -12,8 +12,6 @@ namespace teejet::candump {
 namespace {
 
 using codec::CanFrame;
-using codec::Error;
-using codec::ErrorCode;
 
 // Linux <linux/can.h> values, spelled out so that this library builds without kernel headers.
 constexpr std::uint32_t kErrorFrameFlag = 0x20000000;  // CAN_ERR_FLAG
@@ -168,7 +166,7 @@ std::optional<Error> parse_payload(std::string_view text, CanFrame& frame) {
 
 }  // namespace
 
-codec::Result<LogRecord> parse_log_line(std::string_view line) {
+Result<LogRecord> parse_log_line(std::string_view line) {
   std::string_view rest = line;
   skip_blanks(rest);
   if (rest.empty() || rest.front() != '(') {

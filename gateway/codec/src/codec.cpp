@@ -154,30 +154,6 @@ std::string hex_id(std::uint32_t value, int digits) {
 
 using detail::Dispatch;
 
-const char* to_string(ErrorCode code) {
-  switch (code) {
-    case ErrorCode::kNotExtendedFrame:
-      return "not an extended data frame";
-    case ErrorCode::kNotThisPgn:
-      return "not this PGN";
-    case ErrorCode::kNotControllerTraffic:
-      return "not to or from the controller";
-    case ErrorCode::kNotValveAddress:
-      return "not a valve address";
-    case ErrorCode::kTooShort:
-      return "too short";
-    case ErrorCode::kUnknownMessageId:
-      return "unknown message id";
-    case ErrorCode::kInvalidMarker:
-      return "invalid marker byte";
-    case ErrorCode::kInvalidValue:
-      return "invalid value";
-    case ErrorCode::kOutOfRange:
-      return "out of range";
-  }
-  return "unknown error";
-}
-
 const char* to_string(Flow flow) { return flow == Flow::kToValve ? "to_valve" : "from_valve"; }
 
 Result<Route> route_of(const CanFrame& frame) {
@@ -239,6 +215,16 @@ Result<CanFrame> encode(std::uint8_t valve_address, const FromValveMessage& mess
                         const EncodeOptions& options) {
   if (auto checked = detail::check_valve_address(valve_address); !checked) return checked.error();
   return Dispatch<FromValveMessage>::encode(message, from_valve_id(valve_address), options);
+}
+
+bool is_run_command(const ToValveMessage& message) {
+  return std::visit(
+      [](const auto& m) { return detail::kSpec<std::decay_t<decltype(m)>>.run_command; }, message);
+}
+
+std::optional<std::uint8_t> reply_id(const ToValveMessage& message) {
+  return std::visit([](const auto& m) { return detail::kSpec<std::decay_t<decltype(m)>>.reply; },
+                    message);
 }
 
 std::uint8_t message_id(const ToValveMessage& message) { return detail::id_of(message); }

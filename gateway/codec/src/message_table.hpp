@@ -30,84 +30,6 @@ inline constexpr EnumField<TargetDirection> kTargetDirection{};
 inline constexpr EnumField<Rotation> kRotation{};
 inline constexpr EnumField<BaudAction> kBaudAction{ErrorCode::kInvalidMarker};
 
-// ---- Controller to valve (0x18EF<valve>D5) --------------------------------------------------
-
-constexpr auto spec(std::type_identity<Stop>) { return message<Stop>(0x00, "stop"); }
-
-constexpr auto spec(std::type_identity<Manual>) {
-  return message<Manual>(0x01, "manual",
-                         field("speed_percent", 1, &Manual::speed_percent, kSpeedPercent),
-                         field("direction", 2, &Manual::direction, kDirection));
-}
-
-constexpr auto spec(std::type_identity<TargetDegrees>) {
-  using M = TargetDegrees;
-  return message<M>(0x02, "target_degrees",
-                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
-                    field("direction", 2, &M::direction, kTargetDirection),
-                    field("degrees", 3, &M::degrees, kTenthsOfDegree));
-}
-
-constexpr auto spec(std::type_identity<DegreesFromPosition>) {
-  using M = DegreesFromPosition;
-  return message<M>(0x03, "degrees_from_position",
-                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
-                    field("direction", 2, &M::direction, kDirection),
-                    field("degrees", 3, &M::degrees, kTenthsOfDegree));
-}
-
-constexpr auto spec(std::type_identity<ClearErrors>) {
-  return message<ClearErrors>(0x04, "clear_errors");
-}
-
-constexpr auto spec(std::type_identity<MillisecondsToRun>) {
-  using M = MillisecondsToRun;
-  return message<M>(0x05, "milliseconds_to_run",
-                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
-                    field("direction", 2, &M::direction, kDirection),
-                    field("milliseconds", 3, &M::milliseconds, kMilliseconds));
-}
-
-constexpr auto spec(std::type_identity<RequestVersion>) {
-  return message<RequestVersion>(0x10, "request_version");
-}
-
-template <class Request>
-constexpr auto telemetry_request(std::string_view name) {
-  return message<Request>(Request::kId, name,
-                          field("resend_tenths", 1, &Request::resend_tenths, kResendTenths));
-}
-
-constexpr auto spec(std::type_identity<RequestPosition>) {
-  return telemetry_request<RequestPosition>("request_position");  // 0x11
-}
-constexpr auto spec(std::type_identity<RequestTemperature>) {
-  return telemetry_request<RequestTemperature>("request_temperature");  // 0x12
-}
-constexpr auto spec(std::type_identity<RequestVoltage>) {
-  return telemetry_request<RequestVoltage>("request_voltage");  // 0x13
-}
-constexpr auto spec(std::type_identity<RequestCurrent>) {
-  return telemetry_request<RequestCurrent>("request_current");  // 0x14
-}
-constexpr auto spec(std::type_identity<RequestDegreesPerSecond>) {
-  return telemetry_request<RequestDegreesPerSecond>("request_degrees_per_second");  // 0x15
-}
-constexpr auto spec(std::type_identity<RequestSpeedDirection>) {
-  return telemetry_request<RequestSpeedDirection>("request_speed_direction");  // 0x16
-}
-constexpr auto spec(std::type_identity<RequestRunTime>) {
-  return telemetry_request<RequestRunTime>("request_run_time");  // 0x17
-}
-constexpr auto spec(std::type_identity<RequestCycleCounts>) {
-  return telemetry_request<RequestCycleCounts>("request_cycle_counts");  // 0x18
-}
-
-constexpr auto spec(std::type_identity<BaudRate>) {
-  return message<BaudRate>(0x93, "baud_rate", field("action", 1, &BaudRate::action, kBaudAction),
-                           field("bit_rate", 2, &BaudRate::bit_rate, kBitRate));
-}
-
 // ---- Valve to controller (0x18EFD5<valve>) --------------------------------------------------
 
 constexpr auto spec(std::type_identity<IAmHere>) {
@@ -211,6 +133,97 @@ constexpr auto spec(std::type_identity<BaudRateReply>) {
   return message<BaudRateReply>(0x93, "baud_rate_reply",
                                 MarkerByte<BaudRateReply>{"marker", 1, 0xA5},
                                 field("bit_rate", 2, &BaudRateReply::bit_rate, kBitRate));
+}
+
+// ---- Controller to valve (0x18EF<valve>D5) --------------------------------------------------
+
+// A request names the message that answers it.
+template <class Reply>
+inline constexpr std::uint8_t kReplyId = spec(std::type_identity<Reply>{}).id;
+
+constexpr auto spec(std::type_identity<Stop>) { return message<Stop>(0x00, "stop").runs(); }
+
+constexpr auto spec(std::type_identity<Manual>) {
+  return message<Manual>(0x01, "manual",
+                         field("speed_percent", 1, &Manual::speed_percent, kSpeedPercent),
+                         field("direction", 2, &Manual::direction, kDirection))
+      .runs();
+}
+
+constexpr auto spec(std::type_identity<TargetDegrees>) {
+  using M = TargetDegrees;
+  return message<M>(0x02, "target_degrees",
+                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
+                    field("direction", 2, &M::direction, kTargetDirection),
+                    field("degrees", 3, &M::degrees, kTenthsOfDegree))
+      .runs();
+}
+
+constexpr auto spec(std::type_identity<DegreesFromPosition>) {
+  using M = DegreesFromPosition;
+  return message<M>(0x03, "degrees_from_position",
+                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
+                    field("direction", 2, &M::direction, kDirection),
+                    field("degrees", 3, &M::degrees, kTenthsOfDegree))
+      .runs();
+}
+
+constexpr auto spec(std::type_identity<ClearErrors>) {
+  return message<ClearErrors>(0x04, "clear_errors").runs();
+}
+
+constexpr auto spec(std::type_identity<MillisecondsToRun>) {
+  using M = MillisecondsToRun;
+  return message<M>(0x05, "milliseconds_to_run",
+                    field("speed_percent", 1, &M::speed_percent, kSpeedPercent),
+                    field("direction", 2, &M::direction, kDirection),
+                    field("milliseconds", 3, &M::milliseconds, kMilliseconds))
+      .runs();
+}
+
+constexpr auto spec(std::type_identity<RequestVersion>) {
+  return message<RequestVersion>(0x10, "request_version").answered_by(kReplyId<VersionInfo>);
+}
+
+template <class Request, class Reply>
+constexpr auto telemetry_request(std::string_view name) {
+  return message<Request>(Request::kId, name,
+                          field("resend_tenths", 1, &Request::resend_tenths, kResendTenths))
+      .answered_by(kReplyId<Reply>);
+}
+
+constexpr auto spec(std::type_identity<RequestPosition>) {
+  return telemetry_request<RequestPosition, Position>("request_position");  // 0x11
+}
+constexpr auto spec(std::type_identity<RequestTemperature>) {
+  return telemetry_request<RequestTemperature, Temperature>("request_temperature");  // 0x12
+}
+constexpr auto spec(std::type_identity<RequestVoltage>) {
+  return telemetry_request<RequestVoltage, Voltage>("request_voltage");  // 0x13
+}
+constexpr auto spec(std::type_identity<RequestCurrent>) {
+  return telemetry_request<RequestCurrent, RunCurrent>("request_current");  // 0x14
+}
+constexpr auto spec(std::type_identity<RequestDegreesPerSecond>) {
+  return telemetry_request<RequestDegreesPerSecond, DegreesPerSecond>(
+      "request_degrees_per_second");  // 0x15
+}
+constexpr auto spec(std::type_identity<RequestSpeedDirection>) {
+  return telemetry_request<RequestSpeedDirection, SpeedDirection>(
+      "request_speed_direction");  // 0x16
+}
+constexpr auto spec(std::type_identity<RequestRunTime>) {
+  return telemetry_request<RequestRunTime, RunTime>("request_run_time");  // 0x17
+}
+constexpr auto spec(std::type_identity<RequestCycleCounts>) {
+  return telemetry_request<RequestCycleCounts, CycleCounts>("request_cycle_counts");  // 0x18
+}
+
+constexpr auto spec(std::type_identity<BaudRate>) {
+  // Set and request alike: the valve answers with its (new) bit rate.
+  return message<BaudRate>(0x93, "baud_rate", field("action", 1, &BaudRate::action, kBaudAction),
+                           field("bit_rate", 2, &BaudRate::bit_rate, kBitRate))
+      .answered_by(kReplyId<BaudRateReply>);
 }
 
 }  // namespace teejet::codec::detail

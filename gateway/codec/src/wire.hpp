@@ -308,6 +308,20 @@ struct MessageSpec {
   std::uint8_t id;
   std::string_view name;
   std::tuple<Fields...> fields;
+  // Controller to valve only: what the message makes the valve do.
+  bool run_command = false;             // replaces what the valve was doing (sheet, note 5)
+  std::optional<std::uint8_t> reply{};  // the valve-to-controller message that answers it
+
+  constexpr MessageSpec runs() const {
+    MessageSpec spec = *this;
+    spec.run_command = true;
+    return spec;
+  }
+  constexpr MessageSpec answered_by(std::uint8_t reply_id) const {
+    MessageSpec spec = *this;
+    spec.reply = reply_id;
+    return spec;
+  }
 
   // Bytes the message occupies, id byte included.
   constexpr std::size_t length() const {

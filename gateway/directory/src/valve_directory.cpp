@@ -12,6 +12,8 @@ const char* to_string(ChangeKind kind) {
       return "came online";
     case ChangeKind::kWentOffline:
       return "went offline";
+    case ChangeKind::kDisplaced:
+      return "displaced";
     case ChangeKind::kModeChanged:
       return "mode changed";
   }
@@ -22,16 +24,24 @@ ValveDirectory::ValveDirectory(std::chrono::nanoseconds offline_after)
     : offline_after_(offline_after) {}
 
 std::vector<Change> ValveDirectory::on_i_am_here(std::uint8_t address,
-                                                 const codec::IAmHere& message,
-                                                 Timestamp received) {
+                                                 const codec::IAmHere& message, Timestamp received,
+                                                 SteadyTime now) {
   std::vector<Change> changes;
   // Whoever announced here before has moved (or is gone): the address now means this serial.
-  serial_by_address_[address] = message.serial;
+  auto [slot, fresh] = serial_by_address_.try_emplace(address, message.serial);
+  if (!fresh && slot->second != message.serial) {
+    ValveRecord& previous = by_serial_.at(slot->second);
+    if (previous.address == address && previous.online) {
+      previous.online = false;
+      changes.push_back({ChangeKind::kDisplaced, previous, address});
+    }
+  }
+  slot->second = message.serial;
 
   auto [it, inserted] = by_serial_.try_emplace(message.serial);
   ValveRecord& valve = it->second;
   const ValveRecord before = valve;
-  valve = {message.serial, address, true, message.part_number, message.boot_mode, received};
+  valve = {message.serial, address, true, message.part_number, message.boot_mode, received, now};
 
   if (inserted) {
     changes.push_back({ChangeKind::kAppeared, valve, std::nullopt});
@@ -52,10 +62,10 @@ std::vector<Change> ValveDirectory::on_i_am_here(std::uint8_t address,
   return changes;
 }
 
-std::vector<Change> ValveDirectory::expire(Timestamp now) {
+std::vector<Change> ValveDirectory::expire(SteadyTime now) {
   std::vector<Change> changes;
   for (auto& [serial, valve] : by_serial_) {
-    if (valve.online && now - valve.last_seen > offline_after_) {
+    if (valve.online && now - valve.last_heard > offline_after_) {
       valve.online = false;
       changes.push_back({ChangeKind::kWentOffline, valve, std::nullopt});
     }
@@ -90,11 +100,11 @@ std::size_t ValveDirectory::online_count() const {
   return count;
 }
 
-std::optional<Timestamp> ValveDirectory::next_expiry() const {
-  std::optional<Timestamp> earliest;
+std::optional<SteadyTime> ValveDirectory::next_expiry() const {
+  std::optional<SteadyTime> earliest;
   for (const auto& [serial, valve] : by_serial_) {
     if (!valve.online) continue;
-    const Timestamp due = valve.last_seen + offline_after_;
+    const SteadyTime due = valve.last_heard + offline_after_;
     if (!earliest || due < *earliest) earliest = due;
   }
   return earliest;

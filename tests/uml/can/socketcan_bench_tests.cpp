@@ -3,6 +3,8 @@
 // link never disturbs the next one. Peers are what a user would use: cansend/candump, or a raw
 // socket written here by hand. Waits are on conditions with deadlines, never sleep-and-hope;
 // "nothing arrived" is proved by a marker frame sent after the frames that must not arrive.
+// Where another thread or process must be ready first, the kernel says when it is: candump's
+// filter shows in /proc/net/can, a receiver blocked in poll() shows as sleeping in /proc.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <linux/can.h>
@@ -12,6 +14,7 @@
 #include <poll.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -20,12 +23,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <iostream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "support/eventually.hpp"
 #include "teejet/can/socketcan_bus.hpp"
 
 namespace teejet::can {
@@ -33,6 +39,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using SteadyClock = std::chrono::steady_clock;
+using teejet::testing::eventually;
 
 // ---- helpers -----------------------------------------------------------------------------
 
@@ -59,7 +66,47 @@ std::chrono::microseconds thread_cpu() {
 }
 
 Timestamp realtime_now() {
-  return std::chrono::duration_cast<Timestamp>(std::chrono::system_clock::now().time_since_epoch());
+  return std::chrono::time_point_cast<Duration>(std::chrono::system_clock::now());
+}
+
+// Waits until the wall clock reads later than `time`. The kernel stamps a frame with the same
+// clock while the sender's write() runs, so a frame written afterwards gets a later stamp than
+// every frame written before `time` was read.
+bool wall_clock_passes(Timestamp time) {
+  const auto deadline = SteadyClock::now() + 1s;
+  while (realtime_now() <= time) {
+    if (SteadyClock::now() >= deadline) return false;
+    std::this_thread::yield();
+  }
+  return true;
+}
+
+// True once some CAN_RAW socket on `interface` has a receive filter for `hex_id` (lower-case hex
+// without flags) in the kernel: from then on such frames are queued for it. The kernel lists its
+// receivers per list and device in /proc/net/can/rcvlist_*: "  DEVICE  CAN_ID  CAN_MASK ...".
+bool receiver_registered(const std::string& interface, const std::string& hex_id) {
+  for (const char* list : {"rcvlist_fil", "rcvlist_eff", "rcvlist_sff", "rcvlist_all"}) {
+    std::ifstream file(std::string("/proc/net/can/") + list);
+    for (std::string line; std::getline(file, line);) {
+      std::istringstream fields(line);
+      std::string device, can_id;
+      if (fields >> device >> can_id && device == interface &&
+          can_id.find(hex_id) != std::string::npos) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// The scheduler state of one of our threads, from /proc/self/task/TID/stat: 'R' running, 'S' in
+// an interruptible wait (poll, a futex, a sleep), 0 when it cannot be read.
+char thread_state(pid_t tid) {
+  std::ifstream file("/proc/self/task/" + std::to_string(tid) + "/stat");
+  std::string stat;
+  std::getline(file, stat);
+  const auto name_end = stat.rfind(')');  // the thread name may itself contain ") "
+  return name_end != std::string::npos && name_end + 2 < stat.size() ? stat[name_end + 2] : '\0';
 }
 
 double ms(SteadyClock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
@@ -241,7 +288,11 @@ TEST_F(SocketCanBench, FramesCarryKernelTimestampsCloseToTheClockAndInOrder) {
   constexpr int kFrames = 50;
   for (int i = 0; i < kFrames; ++i) {
     ASSERT_TRUE(peer.send(eff(0x18EFD5D8), {0x11, static_cast<std::uint8_t>(i)}));
-    if (i % 10 == 0) std::this_thread::sleep_for(2ms);  // spread the stamps a little
+    // Every tenth frame, let the clock move on: the stamps must then differ, whatever the clock's
+    // resolution, so equal stamps cannot pass for real ones.
+    if (i % 10 == 9) {
+      ASSERT_TRUE(wall_clock_passes(realtime_now()));
+    }
   }
   std::vector<TimedFrame> got;
   while (got.size() < kFrames) {
@@ -254,7 +305,7 @@ TEST_F(SocketCanBench, FramesCarryKernelTimestampsCloseToTheClockAndInOrder) {
     EXPECT_EQ(got[i].frame.data[1], i);
     EXPECT_GE(got[i].received, before) << i;
     EXPECT_LE(got[i].received, after) << i;
-    EXPECT_LT(after - got[i].received, Timestamp{1s}) << i;
+    EXPECT_LT(after - got[i].received, Duration{1s}) << i;
     if (i > 0) {
       EXPECT_GE(got[i].received, got[i - 1].received) << i;
     }
@@ -276,24 +327,21 @@ TEST_F(SocketCanBench, OwnFramesAreNotReceivedBackButOtherSocketsSeeThem) {
   ASSERT_TRUE(first);
   EXPECT_EQ(first->frame, frame(0x18EFD5D8, {0x77}));
 
-  // candump, an independent process, sees what the bus sends.
+  // candump, an independent process, sees what the bus sends. One frame, sent once candump's
+  // filter is in the kernel: it must print exactly that frame and exit by itself.
   std::FILE* candump =
       ::popen(("timeout 5 candump -L -n 1 " + interface + ",18EFD9D5:1FFFFFFF").c_str(), "r");
   ASSERT_NE(candump, nullptr);
-  std::atomic<bool> done = false;
+  const bool listening = eventually([&] { return receiver_registered(interface, "18efd9d5"); }, 4s);
+  const bool sent = listening && bus.send(frame(0x18EFD9D5, {0x11, 0x22})).ok();
   std::string line(256, '\0');
-  std::thread reader([&] {
-    if (std::fgets(line.data(), static_cast<int>(line.size()), candump) == nullptr) line.clear();
-    done = true;
-  });
-  const auto deadline = SteadyClock::now() + 4s;
-  while (!done && SteadyClock::now() < deadline) {  // until candump has bound and printed
-    ASSERT_TRUE(bus.send(frame(0x18EFD9D5, {0x11, 0x22})));
-    std::this_thread::sleep_for(50ms);
-  }
-  reader.join();
-  ::pclose(candump);
+  // Returns once candump printed its frame, or at the latest when `timeout` ends it.
+  if (std::fgets(line.data(), static_cast<int>(line.size()), candump) == nullptr) line.clear();
+  const int status = ::pclose(candump);
+  ASSERT_TRUE(listening) << "candump's filter never showed in /proc/net/can";
+  ASSERT_TRUE(sent);
   EXPECT_NE(line.find(interface + " 18EFD9D5#1122"), std::string::npos) << line;
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "candump: status " << status;
 }
 
 // ---- link faults ---------------------------------------------------------------------------
@@ -305,7 +353,7 @@ TEST_F(SocketCanBench, LinkDownFailsSendsVisiblyIdlesQuietlyAndRecoversWhenUp) {
 
   const Status refused = bus.send(frame(0x18EFD8D5, {0x11}));
   EXPECT_FALSE(refused);
-  EXPECT_EQ(refused.error_number(), ENETDOWN) << refused.reason();
+  EXPECT_EQ(refused.error().os_error, ENETDOWN) << refused.error().reason;
   EXPECT_EQ(bus.statistics().state, BusState::kDown);
   EXPECT_EQ(bus.statistics().tx_failed, 1u);
 
@@ -345,8 +393,8 @@ TEST_F(SocketCanBench, DeletedInterfaceIsReopenedWhenItReturns) {
       receive_until_stats(bus, [](const BusStatistics& s) { return s.state == BusState::kDown; }));
   const Status refused = bus.send(frame(0x18EFD8D5, {0x11}));
   EXPECT_FALSE(refused);
-  EXPECT_TRUE(refused.error_number() == ENODEV || refused.error_number() == ENXIO)
-      << refused.reason();
+  EXPECT_TRUE(refused.error().os_error == ENODEV || refused.error().os_error == ENXIO)
+      << refused.error().reason;
 
   const auto cpu_before = thread_cpu();
   EXPECT_FALSE(bus.receive(1s));  // reopen attempts with backoff meanwhile, all failing
@@ -384,15 +432,13 @@ TEST_F(SocketCanBench, SendAloneNoticesAndRecoversADeletedInterface) {
   ASSERT_EQ(shell("ip link del " + interface), 0);
   const Status refused = bus.send(frame(0x18EFD8D5, {0x11}));
   EXPECT_FALSE(refused);
-  EXPECT_EQ(refused.error_number(), ENXIO) << refused.reason();
+  EXPECT_EQ(refused.error().os_error, ENXIO) << refused.error().reason;
   EXPECT_EQ(bus.statistics().state, BusState::kDown);
   ASSERT_EQ(create_interface(), 0);
   RawPeer peer(interface);
   ASSERT_TRUE(peer.ok());
-  const auto back_at = SteadyClock::now();
-  while (!bus.send(frame(0x18EFD8D5, {0x22})) && SteadyClock::now() - back_at < 2s) {
-    std::this_thread::sleep_for(20ms);
-  }
+  // Each refused send tries the reopen once its backoff is due; the first accepted one is seen.
+  ASSERT_TRUE(eventually([&] { return bus.send(frame(0x18EFD8D5, {0x22})).ok(); }, 2s));
   auto seen = peer.receive(1s);
   ASSERT_TRUE(seen);
   EXPECT_EQ(seen->data[0], 0x22);
@@ -403,7 +449,7 @@ TEST_F(SocketCanBench, OpenFailsVisiblyForAMissingInterface) {
   SocketCanBus bus("tjbench-none");
   const Status status = bus.open();
   EXPECT_FALSE(status);
-  EXPECT_EQ(status.error_number(), ENODEV) << status.reason();
+  EXPECT_EQ(status.error().os_error, ENODEV) << status.error().reason;
   EXPECT_FALSE(bus.send(frame(0x18EFD8D5, {0x11})));
   EXPECT_FALSE(bus.receive(0ms));
 }
@@ -524,7 +570,7 @@ TEST_F(SocketCanBench, FullDeviceQueueUsesTheBoundedRetryQueue) {
   }
   const Status refused = bus.send(frame(0x18EFD8D5, {0x05, 0xFF}));
   EXPECT_FALSE(refused);
-  EXPECT_EQ(refused.error_number(), ENOBUFS) << refused.reason();
+  EXPECT_EQ(refused.error().os_error, ENOBUFS) << refused.error().reason;
   auto stats = bus.statistics();
   EXPECT_EQ(stats.frames_out, 4u);
   EXPECT_EQ(stats.tx_failed, 1u);
@@ -602,10 +648,7 @@ TEST_F(SocketCanBench, SendsFromOtherThreadsWhileOneThreadReceives) {
   for (int i = 0; i < kPerThread; ++i) ASSERT_TRUE(other.send(eff(0x18EFD5D8), {0x02}));
   for (auto& sender : senders) sender.join();
   watcher.join();
-  const auto deadline = SteadyClock::now() + 2s;
-  while (received < kPerThread && SteadyClock::now() < deadline) {
-    std::this_thread::sleep_for(5ms);  // polling a counter, with a deadline
-  }
+  (void)eventually([&] { return received >= kPerThread; }, 2s);  // checked exactly below
   stop = true;
   receiver.join();
   EXPECT_EQ(seen.load(), 3 * kPerThread);
@@ -619,19 +662,30 @@ TEST_F(SocketCanBench, SendsFromOtherThreadsWhileOneThreadReceives) {
 TEST_F(SocketCanBench, CloseWakesABlockedReceiver) {
   SocketCanBus bus(interface);
   ASSERT_TRUE(bus.open());
-  std::optional<std::chrono::milliseconds> returned_after;
+  std::atomic<pid_t> receiver_tid = 0;
+  std::optional<SteadyClock::time_point> returned_at;
   std::thread receiver([&] {
-    const auto started = SteadyClock::now();
+    receiver_tid = ::gettid();
     EXPECT_FALSE(bus.receive(10s));
-    returned_after =
-        std::chrono::duration_cast<std::chrono::milliseconds>(SteadyClock::now() - started);
+    returned_at = SteadyClock::now();
   });
-  std::this_thread::sleep_for(100ms);  // let it block (either way it must return promptly)
+  // Close only once the receiver sleeps in receive()'s poll(), the one place this thread can
+  // sleep: a close() before it waits would return it without testing the wake-up.
+  const bool blocked = eventually(
+      [&] {
+        const pid_t tid = receiver_tid;
+        return tid != 0 && thread_state(tid) == 'S';
+      },
+      5s);
+  const auto closed_at = SteadyClock::now();
   bus.close();
   receiver.join();
-  ASSERT_TRUE(returned_after);
-  EXPECT_LT(*returned_after, 1s);
+  ASSERT_TRUE(blocked) << "the receiver never blocked";
+  ASSERT_TRUE(returned_at);
+  const auto woke_after = *returned_at - closed_at;
+  EXPECT_LT(woke_after, 1s);  // its receive(10 s) was ended by close()
   EXPECT_FALSE(bus.send(frame(0x18EFD8D5, {0x11})));
+  std::cout << "[ measure  ] close() woke the blocked receiver after " << ms(woke_after) << " ms\n";
 }
 
 }  // namespace

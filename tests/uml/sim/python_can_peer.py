@@ -46,14 +46,33 @@ class Peer:
                 return data
         return None
 
-    def i_am_here(self, seconds):
-        """{serial: (address, part number, run mode)} and the stamps of each serial."""
+    def reply_when(self, done, address, payload, reply_id, seconds=3.0):
+        """Asks every 20 ms until a reply satisfies done(data) or `seconds` pass; returns the
+        last reply (None when none came), for the check to judge and report."""
+        deadline = time.monotonic() + seconds
+        last = None
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return last
+            data = self.reply(address, payload, reply_id, timeout=min(left, 1.0))
+            if data is not None:
+                last = data
+                if done(data):
+                    return data
+            time.sleep(min(0.02, max(0.0, deadline - time.monotonic())))
+
+    def i_am_here(self, done, seconds):
+        """I'm Here frames until done(valves, stamps) holds or `seconds` pass: {serial: (address,
+        part number, run mode)} as last announced, and the stamps of each serial."""
         valves, stamps = {}, {}
         for source, data, stamp in self.frames(seconds):
             if data[0] == 0x00 and len(data) >= 8:
                 serial = u24(data, 4)
                 valves[serial] = (source, u24(data, 1), data[7])
                 stamps.setdefault(serial, []).append(stamp)
+                if done(valves, stamps):
+                    break
         return valves, stamps
 
 
@@ -75,8 +94,10 @@ def main():
 
 
 def run(peer, simulator):
-    # I'm Here: lowest serial at 0xD8, once a second, part number 0, application code.
-    valves, stamps = peer.i_am_here(2.3)
+    # I'm Here: lowest serial at 0xD8, once a second, part number 0, application code. Three of
+    # TJV123456 give two periods.
+    valves, stamps = peer.i_am_here(
+        lambda valves, stamps: len(stamps.get(123456, [])) >= 3 and 123457 in valves, 5.0)
     check(valves.get(123456) == (0xD8, 0, 0), "TJV123456 announces itself at 0xD8: %s" % valves)
     check(valves.get(123457) == (0xD9, 0, 0), "TJV123457 announces itself at 0xD9")
     periods = [b - a for a, b in zip(stamps.get(123456, []), stamps.get(123456, [])[1:])]
@@ -88,18 +109,20 @@ def run(peer, simulator):
           "Version Information: application 1.00, boot loader 1.00 (%s)" % data)
 
     # Target Degrees 90.0 at 100 %, open: 0x02, speed, direction, degrees x 10 (MSB, LSB).
+    # 90 degrees at 180 dps take 0.5 s; the position is asked until it reads 90.0 (or 3 s pass).
     peer.send(0xD9, [0x02, 100, 1] + tenths(90.0))
-    time.sleep(0.8)  # 90 degrees at 180 dps: 0.5 s
-    data = peer.reply(0xD9, [0x11, 0], 0x02)
-    check(data is not None and u16(data, 1) == 900, "position after the move: 90.0 degrees")
+    data = peer.reply_when(lambda data: u16(data, 1) == 900, 0xD9, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 900,
+          "position after the move: 90.0 degrees (%s)" % data)
     # Degrees from Position: close by 45.0.
     peer.send(0xD9, [0x03, 50, 0] + tenths(45.0))
     data = peer.reply(0xD9, [0x16, 0], 0x07)  # while it runs
     check(data is not None and list(data[1:4]) == [50, 0, 1],
           "speed 50 %%, closing, opening clockwise while running (%s)" % data)
-    time.sleep(0.8)  # 45 degrees at 90 dps: 0.5 s
-    data = peer.reply(0xD9, [0x11, 0], 0x02)
-    check(data is not None and u16(data, 1) == 450, "position after closing 45: 45.0 degrees")
+    # 45 degrees at 90 dps: 0.5 s.
+    data = peer.reply_when(lambda data: u16(data, 1) == 450, 0xD9, [0x11, 0], 0x02)
+    check(data is not None and u16(data, 1) == 450,
+          "position after closing 45: 45.0 degrees (%s)" % data)
     data = peer.reply(0xD9, [0x18, 0], 0x09)
     check(data is not None and u32(data, 1) == 2, "cycle count 2")
     data = peer.reply(0xD9, [0x15, 0], 0x06)
@@ -110,7 +133,9 @@ def run(peer, simulator):
 
     # SIGUSR1 adds TJV123455: it takes 0xD8 and the others move up one address.
     simulator.send_signal(signal.SIGUSR1)
-    valves, _ = peer.i_am_here(1.5)
+    moved = {123455: 0xD8, 123456: 0xD9, 123457: 0xDA}
+    valves, _ = peer.i_am_here(
+        lambda valves, _: all(valves.get(s, (None,))[0] == a for s, a in moved.items()), 3.0)
     check(valves.get(123455, (None,))[0] == 0xD8, "TJV123455 added at 0xD8: %s" % valves)
     check(valves.get(123456, (None,))[0] == 0xD9, "TJV123456 moved to 0xD9")
     check(valves.get(123457, (None,))[0] == 0xDA, "TJV123457 moved to 0xDA")

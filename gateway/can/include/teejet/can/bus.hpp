@@ -10,36 +10,16 @@
 #include <string>
 #include <vector>
 
-#include "teejet/can/clock.hpp"
 #include "teejet/codec/frame.hpp"
+#include "teejet/core/result.hpp"
+#include "teejet/core/time.hpp"
 
 namespace teejet::can {
 
 struct TimedFrame {
   codec::CanFrame frame;
-  Timestamp received{};  // kernel receive time on SocketCAN, the bus clock on the virtual bus
-};
-
-// Success, or why not.
-class [[nodiscard]] Status {
- public:
-  Status() = default;
-  static Status failure(std::string reason, int error_number = 0) {
-    Status status;
-    status.failed_ = true;
-    status.reason_ = std::move(reason);
-    status.error_number_ = error_number;
-    return status;
-  }
-  bool ok() const { return !failed_; }
-  explicit operator bool() const { return ok(); }
-  const std::string& reason() const { return reason_; }
-  int error_number() const { return error_number_; }  // errno, 0 when not an OS error
-
- private:
-  bool failed_ = false;
-  std::string reason_;
-  int error_number_ = 0;
+  Timestamp received{};  // wall clock: the kernel's receive time on SocketCAN, the bus clock's on
+                         // the virtual bus
 };
 
 // Accepts an extended frame when (id & mask) == (filter.id & mask).

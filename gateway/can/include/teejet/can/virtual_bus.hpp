@@ -39,6 +39,11 @@ class VirtualBus final : public Bus {
   // Delivers a frame to this endpoint only, as if it had come from the bus (filters apply).
   void inject(const codec::CanFrame& frame);
 
+  // For tests and diagnostics: how many threads are blocked in receive() on this endpoint now,
+  // waiting for a frame or close(). Once it counts a thread, a frame sent or a close() from then
+  // on reaches that thread while it waits: tests act only then, instead of sleeping.
+  std::size_t waiting_receivers() const;
+
   // Fault injection for every endpoint of a named bus: a link that is down refuses sends and
   // reports BusState::kDown; the controller state and error counters show in statistics().
   static void set_link_up(const std::string& bus_name, bool up);
@@ -58,6 +63,7 @@ class VirtualBus final : public Bus {
   std::condition_variable arrived_;
   std::deque<TimedFrame> queue_;
   BusStatistics statistics_;
+  std::size_t waiting_ = 0;  // threads inside receive()'s wait
   bool open_ = false;
 };
 

@@ -13,7 +13,7 @@
 #include <string_view>
 
 #include "teejet/codec/frame.hpp"
-#include "teejet/codec/result.hpp"
+#include "teejet/core/result.hpp"
 
 namespace teejet::candump {
 
@@ -37,7 +37,7 @@ struct LogRecord {
 // <seconds>.<six digits>, an identifier that is neither 3 (11-bit) nor 8 (29-bit) hex digits or
 // exceeds its width, error frames (CAN_ERR_FLAG 0x20000000), CAN FD frames ("##"), an odd number
 // of hex digits, more than eight data bytes, and raw DLC suffixes ("_9").
-codec::Result<LogRecord> parse_log_line(std::string_view line);
+Result<LogRecord> parse_log_line(std::string_view line);
 
 // Formats a frame exactly as `candump -L` does: seconds zero-padded to ten digits, uppercase
 // hex, eight identifier digits for 29-bit and three for 11-bit frames, "#R" plus the length

@@ -3,7 +3,7 @@
 #include <cstdint>
 
 #include "teejet/codec/frame.hpp"
-#include "teejet/codec/result.hpp"
+#include "teejet/core/result.hpp"
 
 namespace teejet::codec {
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -13,7 +14,7 @@
 #include "teejet/codec/can_id.hpp"
 #include "teejet/codec/frame.hpp"
 #include "teejet/codec/messages.hpp"
-#include "teejet/codec/result.hpp"
+#include "teejet/core/result.hpp"
 
 namespace teejet::codec {
 
@@ -47,6 +48,17 @@ Result<CanFrame> encode(std::uint8_t valve_address, const ToValveMessage& messag
                         const EncodeOptions& options = {});
 Result<CanFrame> encode(std::uint8_t valve_address, const FromValveMessage& message,
                         const EncodeOptions& options = {});
+
+// ---- What a message makes the valve do, from the message table ----------------------------
+
+// A run command (Stop, Manual, Target Degrees, Degrees from Position, Clear Errors, Milliseconds
+// to Run) replaces whatever the valve was doing: it completes the last command received.
+bool is_run_command(const ToValveMessage& message);
+
+// The id of the valve-to-controller message that answers a request (Request Position 0x11 is
+// answered by Position 0x02, CAN Baud Rate 0x93 by CAN Baud Rate Reply 0x93); nullopt for run
+// commands.
+std::optional<std::uint8_t> reply_id(const ToValveMessage& message);
 
 // ---- Introspection, for tools that print or log messages generically ------------------------
 

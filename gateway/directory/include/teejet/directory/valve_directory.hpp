@@ -10,10 +10,9 @@
 #include <vector>
 
 #include "teejet/codec/messages.hpp"
+#include "teejet/core/time.hpp"
 
 namespace teejet::directory {
-
-using Timestamp = std::chrono::nanoseconds;  // since the Unix epoch, as the CAN layer stamps
 
 struct ValveRecord {
   std::uint32_t serial = 0;
@@ -21,7 +20,8 @@ struct ValveRecord {
   bool online = false;
   std::uint32_t part_number = 0;
   bool boot_mode = false;
-  Timestamp last_seen{};
+  Timestamp last_seen{};    // wall-clock receive time of the last I'm Here, for people
+  SteadyTime last_heard{};  // the same instant on the steady clock, for the offline timeout
   friend bool operator==(const ValveRecord&, const ValveRecord&) = default;
 };
 
@@ -30,6 +30,9 @@ enum class ChangeKind {
   kReaddressed,  // the same serial announced from another address
   kCameOnline,   // announced again after being offline
   kWentOffline,  // no I'm Here within the offline timeout
+  // Another valve announced itself at this valve's address: where this one is now is unknown
+  // until it announces again, so it is offline (nothing may be sent to its old address).
+  kDisplaced,
   kModeChanged,  // boot mode or part number changed
 };
 
@@ -38,7 +41,7 @@ const char* to_string(ChangeKind kind);
 struct Change {
   ChangeKind kind;
   ValveRecord valve;                             // the state after the change
-  std::optional<std::uint8_t> previous_address;  // set for kReaddressed
+  std::optional<std::uint8_t> previous_address;  // set for kReaddressed and kDisplaced
   friend bool operator==(const Change&, const Change&) = default;
 };
 
@@ -46,12 +49,14 @@ class ValveDirectory {
  public:
   explicit ValveDirectory(std::chrono::nanoseconds offline_after = std::chrono::seconds(3));
 
-  // Learns from one I'm Here and returns what changed (nothing for a routine heartbeat).
+  // Learns from one I'm Here, received at `received` (wall clock) and handled at `now`, and
+  // returns what changed (nothing for a routine heartbeat). A valve that held the address until
+  // now is displaced (reported first).
   std::vector<Change> on_i_am_here(std::uint8_t address, const codec::IAmHere& message,
-                                   Timestamp received);
+                                   Timestamp received, SteadyTime now);
 
   // Marks valves offline whose last I'm Here is older than the timeout at `now`.
-  std::vector<Change> expire(Timestamp now);
+  std::vector<Change> expire(SteadyTime now);
 
   // The online valve that last announced itself at `address`: whose telemetry this is.
   std::optional<std::uint32_t> serial_at(std::uint8_t address) const;
@@ -61,7 +66,7 @@ class ValveDirectory {
   std::size_t online_count() const;
 
   // When the next valve would go offline if nothing arrives; nullopt when none is online.
-  std::optional<Timestamp> next_expiry() const;
+  std::optional<SteadyTime> next_expiry() const;
 
  private:
   std::chrono::nanoseconds offline_after_;

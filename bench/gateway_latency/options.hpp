@@ -1,0 +1,51 @@
+#pragma once
+
+// What every mode of gateway_latency shares: the values of its command line, and how a mode
+// ends when something it needs is refused.
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "teejet/codec/can_id.hpp"
+#include "teejet/core/result.hpp"
+
+namespace teejet::bench {
+
+inline constexpr int kExitFailure = 1;
+
+struct Options {
+  // DDS
+  int domain = 0;
+  std::string profile;
+  // Latency series
+  std::string label = "run";
+  int samples = 1000;
+  int warmup = 100;
+  int pace_min_ms = 10;
+  int pace_max_ms = 20;
+  std::string raw_dir;
+  // The bench valve (gateway mode)
+  std::string can = "vcan0";
+  std::uint32_t serial = 900001;
+  int address = codec::kLastValveAddress;
+  // Baseline child (receive mode)
+  std::string topic;
+  int count = 0;
+  int timeout_s = 120;
+  // Resources mode
+  std::vector<int> pids;
+  double window_s = 30.0;
+  double settle_s = 5.0;
+  std::string interface;
+  bool subscribe = false;
+};
+
+// Reports what was refused on stderr; returns the exit status for the mode to return.
+inline int fail(const Error& error) {
+  std::fprintf(stderr, "gateway_latency: %s\n", error.reason.c_str());
+  return kExitFailure;
+}
+
+}  // namespace teejet::bench

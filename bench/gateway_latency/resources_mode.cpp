@@ -1,0 +1,203 @@
+// resources mode: CPU and memory of running processes over a window, the bus frame rate, and
+// (--subscribe) what an ECU reading every gateway topic receives meanwhile.
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <thread>
+#include <vector>
+
+#include "dds_support.hpp"
+#include "listeners.hpp"
+#include "modes.hpp"
+#include "process_stats.hpp"
+
+namespace teejet::bench {
+
+namespace {
+
+namespace topics = dds::topics;
+
+// The gateway's own counters, from one GatewayStatus sample.
+struct GatewayCounters {
+  std::uint64_t frames_in = 0;
+  std::uint64_t frames_out = 0;
+  std::uint64_t stamp_ns = 0;
+};
+
+// An ECU reading every topic the gateway writes, so the gateway's writers deliver (with no
+// reader matched, a write ends inside the gateway) and the window measures a working gateway.
+class EcuReadingEverything {
+ public:
+  static Result<std::unique_ptr<EcuReadingEverything>> create(const Options& options) {
+    auto participant = dds::Participant::create(
+        {.domain = options.domain, .profile_file = options.profile, .name = "gateway-latency-ecu"});
+    if (!participant) return participant.error();
+    std::unique_ptr<EcuReadingEverything> ecu(new EcuReadingEverything(std::move(*participant)));
+    if (Status read = ecu->read_every_topic(); !read) return read.error();
+    return ecu;
+  }
+
+  std::uint64_t samples() const { return samples_; }
+
+  // Distinct serials on the presence topic: how many valves this ECU can see at all.
+  std::size_t valves_seen() const {
+    std::lock_guard lock(mutex_);
+    return serials_seen_.size();
+  }
+
+  std::optional<GatewayCounters> gateway_counters() const {
+    std::lock_guard lock(mutex_);
+    return gateway_counters_;
+  }
+
+ private:
+  explicit EcuReadingEverything(std::unique_ptr<dds::Participant> participant)
+      : participant_(std::move(participant)) {}
+
+  // Readers for presence, every telemetry topic and the gateway status; the first refusal ends
+  // it.
+  Status read_every_topic() {
+    auto presence =
+        open_reader<ValvePresence>(*participant_, topics::state_reader_qos(), &presence_);
+    if (!presence) return presence.error();
+    if (Status counted = count_each<ValvePosition, ValveVersion, ValveTemperature, ValveVoltage,
+                                    ValveCurrent, ValveDegreesPerSecond, ValveSpeedDirection,
+                                    ValveRunTime, ValveCycleCount, ValveBaudRate, ValveError>();
+        !counted) {
+      return counted;
+    }
+    auto status =
+        open_reader<GatewayStatus>(*participant_, topics::state_reader_qos(), &gateway_status_);
+    if (!status) return status.error();
+    return {};
+  }
+
+  // A counting reader per sample type, in order; && stops at the first refusal.
+  template <class... Samples>
+  Status count_each() {
+    Status counted;
+    (void)((counted = count<Samples>()).ok() && ...);
+    return counted;
+  }
+
+  // A reader that only counts the samples of its topic.
+  template <class Sample>
+  Status count() {
+    auto counter = std::make_unique<OnSample<Sample>>([this](const Sample&) { ++samples_; });
+    auto reader = open_reader<Sample>(*participant_, topics::state_reader_qos(), counter.get());
+    counters_.push_back(std::move(counter));
+    if (!reader) return reader.error();
+    return {};
+  }
+
+  std::atomic<std::uint64_t> samples_{0};
+  mutable std::mutex mutex_;
+  std::optional<GatewayCounters> gateway_counters_;
+  std::set<std::uint32_t> serials_seen_;
+  OnSample<ValvePresence> presence_{[this](const ValvePresence& sample) {
+    ++samples_;
+    std::lock_guard lock(mutex_);
+    serials_seen_.insert(sample.serial());
+  }};
+  OnSample<GatewayStatus> gateway_status_{[this](const GatewayStatus& status) {
+    std::lock_guard lock(mutex_);
+    gateway_counters_ = GatewayCounters{status.frames_in(), status.frames_out(), status.stamp_ns()};
+  }};
+  std::vector<std::unique_ptr<fdds::DataReaderListener>> counters_;
+  std::unique_ptr<dds::Participant> participant_;  // last: destroyed first, before the listeners
+};
+
+}  // namespace
+
+int run_resources(const Options& options) {
+  std::unique_ptr<EcuReadingEverything> ecu;
+  if (options.subscribe) {
+    auto created = EcuReadingEverything::create(options);
+    if (!created) return fail(created.error());
+    ecu = std::move(*created);
+  }
+  // Discovery, the late-joiner burst and the gateway's start-up are not part of the window.
+  const auto settled = std::chrono::steady_clock::now() +
+                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(options.settle_s));
+  // The ECU's figures mean something only once it hears the gateway: wait for that rather than
+  // hope the settling time covers discovery.
+  if (ecu && !wait_until([&] { return ecu->gateway_counters().has_value(); }, kDiscoveryTimeout)) {
+    std::fprintf(stderr, "gateway_latency: no gateway status on domain %d after %lld s\n",
+                 options.domain, static_cast<long long>(kDiscoveryTimeout.count()));
+    return kExitFailure;
+  }
+  std::this_thread::sleep_until(settled);
+
+  struct Start {
+    int pid;
+    std::uint64_t ticks;
+  };
+  std::vector<Start> starts;
+  for (const int pid : options.pids) {
+    const auto ticks = cpu_ticks(pid);
+    if (!ticks) {
+      std::fprintf(stderr, "gateway_latency: no process %d\n", pid);
+      return kExitFailure;
+    }
+    starts.push_back({pid, *ticks});
+  }
+  std::optional<std::uint64_t> frames_before;
+  if (!options.interface.empty()) frames_before = bus_frames(options.interface);
+  const auto samples_before = ecu ? ecu->samples() : 0;
+  const auto gateway_before = ecu ? ecu->gateway_counters() : std::nullopt;
+  const auto window_start = std::chrono::steady_clock::now();
+
+  // The window is a measurement period, not a wait for anything.
+  std::this_thread::sleep_for(std::chrono::duration<double>(options.window_s));
+
+  const double window =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - window_start).count();
+  const double ticks_per_second = static_cast<double>(::sysconf(_SC_CLK_TCK));
+  for (const auto& start : starts) {
+    const auto ticks = cpu_ticks(start.pid);
+    if (!ticks) {
+      std::fprintf(stderr, "gateway_latency: process %d ended during the window\n", start.pid);
+      return kExitFailure;
+    }
+    const double cpu_seconds = static_cast<double>(*ticks - start.ticks) / ticks_per_second;
+    std::printf(
+        "RESOURCES label=%s process=%s window_s=%.1f cpu_percent=%.2f rss_kib=%llu "
+        "hwm_kib=%llu\n",
+        options.label.c_str(), process_name(start.pid).c_str(), window,
+        100.0 * cpu_seconds / window,
+        static_cast<unsigned long long>(status_kib(start.pid, "VmRSS")),
+        static_cast<unsigned long long>(status_kib(start.pid, "VmHWM")));
+  }
+  if (frames_before) {
+    const auto frames_after = bus_frames(options.interface);
+    std::printf("BUS label=%s interface=%s frames_per_s=%.1f\n", options.label.c_str(),
+                options.interface.c_str(),
+                static_cast<double>(frames_after.value_or(0) - *frames_before) / window);
+  }
+  if (ecu) {
+    std::printf("SUBSCRIBER label=%s samples_per_s=%.1f valves_seen=%zu", options.label.c_str(),
+                static_cast<double>(ecu->samples() - samples_before) / window, ecu->valves_seen());
+    const auto gateway_after = ecu->gateway_counters();
+    if (gateway_before && gateway_after && gateway_after->stamp_ns > gateway_before->stamp_ns) {
+      const double seconds =
+          static_cast<double>(gateway_after->stamp_ns - gateway_before->stamp_ns) / 1e9;
+      std::printf(
+          " gateway_frames_in_per_s=%.1f gateway_frames_out_per_s=%.1f",
+          static_cast<double>(gateway_after->frames_in - gateway_before->frames_in) / seconds,
+          static_cast<double>(gateway_after->frames_out - gateway_before->frames_out) / seconds);
+    }
+    std::printf("\n");
+  }
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace teejet::bench

@@ -1,0 +1,61 @@
+#include "bus_backend.hpp"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <charconv>
+
+#include "teejet/can/open_bus.hpp"
+#include "teejet/can/virtual_bus.hpp"
+#include "teejet/codec/can_id.hpp"
+
+namespace teejet::gateway {
+namespace {
+
+std::vector<sim::ValveConfig> simulated_valves(const GatewayConfig& config, int count) {
+  std::vector<sim::ValveConfig> valves;
+  for (int i = 0; i < count; ++i) {
+    sim::ValveConfig valve;
+    valve.serial = config.sim_first_serial + static_cast<std::uint32_t>(i);
+    valve.degrees_per_second = config.sim_degrees_per_second;
+    valve.closed_degrees = config.sim_closed_degrees;
+    valve.opened_degrees = config.sim_opened_degrees;
+    valves.push_back(valve);
+  }
+  return valves;
+}
+
+}  // namespace
+
+Result<std::optional<int>> simulated_valve_count(const std::string& can) {
+  constexpr std::string_view kPrefix = "sim:";
+  if (!can.starts_with(kPrefix)) return std::optional<int>{};
+  const std::string_view digits = std::string_view(can).substr(kPrefix.size());
+  int count = 0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), count);
+  if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() || count < 1 ||
+      count > codec::kValveAddressCount) {
+    return Error{ErrorCode::kOutOfRange,
+                 "--can " + can + ": sim:N takes 1 to 32 valves (one per address 0xD8..0xF7)"};
+  }
+  return std::optional<int>{count};
+}
+
+Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
+  auto simulated = simulated_valve_count(config.can);
+  if (!simulated) return simulated.error();
+  if (!*simulated) return BusBackend{can::make_bus(config.can, can::controller_side_filters()), {}};
+  // Unique per gateway, so that two embedded simulations in one process never share a bus.
+  static std::atomic<int> instances{0};
+  const std::string bus_name =
+      "teejet-sim-" + std::to_string(::getpid()) + "-" + std::to_string(++instances);
+  BusBackend backend;
+  backend.simulator = std::make_unique<sim::Simulator>(
+      std::make_unique<can::VirtualBus>(bus_name,
+                                        can::VirtualBusOptions{can::valve_side_filters()}),
+      sim::SimulatorOptions{.valves = simulated_valves(config, **simulated)});
+  backend.bus = can::make_bus("virtual:" + bus_name, can::controller_side_filters());
+  return backend;
+}
+
+}  // namespace teejet::gateway

@@ -1,0 +1,35 @@
+#include "teejet/core/result.hpp"
+
+namespace teejet {
+
+const char* to_string(ErrorCode code) {
+  switch (code) {
+    case ErrorCode::kNotExtendedFrame:
+      return "not an extended data frame";
+    case ErrorCode::kNotThisPgn:
+      return "not this PGN";
+    case ErrorCode::kNotControllerTraffic:
+      return "not to or from the controller";
+    case ErrorCode::kNotValveAddress:
+      return "not a valve address";
+    case ErrorCode::kTooShort:
+      return "too short";
+    case ErrorCode::kUnknownMessageId:
+      return "unknown message id";
+    case ErrorCode::kInvalidMarker:
+      return "invalid marker byte";
+    case ErrorCode::kInvalidValue:
+      return "invalid value";
+    case ErrorCode::kOutOfRange:
+      return "out of range";
+    case ErrorCode::kSystem:
+      return "system error";
+    case ErrorCode::kUnavailable:
+      return "unavailable";
+    case ErrorCode::kDds:
+      return "DDS error";
+  }
+  return "unknown error";
+}
+
+}  // namespace teejet

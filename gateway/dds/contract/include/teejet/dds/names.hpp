@@ -1,0 +1,18 @@
+#pragma once
+
+// snake_case names of the IDL's enumerations: how the gateway logs them, valvectl prints them and
+// JSON carries them, so that all three agree. Values the IDL does not define read "unknown".
+
+#include <string_view>
+
+#include "teejet/valve.h"
+
+namespace teejet::dds {
+
+std::string_view to_string(CommandKind kind);     // "stop", "target_degrees", ...
+std::string_view to_string(CommandState state);   // "accepted", ..., "superseded"
+std::string_view to_string(Direction direction);  // "close", "open", "shortest"
+std::string_view to_string(ErrorKind kind);       // "high_voltage", ..., "min_degrees_per_second"
+std::string_view to_string(BusState state);       // "error_active", ..., "bus_off", "down"
+
+}  // namespace teejet::dds

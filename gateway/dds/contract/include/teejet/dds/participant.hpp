@@ -1,0 +1,80 @@
+#pragma once
+
+// One DomainParticipant with one publisher and one subscriber, set up as in eProsima's examples
+// (factory -> participant -> register type -> topic -> writer/reader) and torn down in reverse.
+// Shared by the gateway, valvectl, the benchmarks and the tests. Nothing here throws: whatever
+// the middleware refuses comes back as an Error (ErrorCode::kDds) naming what was refused.
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "teejet/core/result.hpp"
+
+namespace teejet::dds {
+
+struct ParticipantOptions {
+  int domain = 0;
+  std::string profile_file;  // Fast DDS XML profiles, loaded before any default QoS is read
+  std::string name = "teejet";
+  // Called with a remote participant's GUID prefix ("01.0f.…") when its lease expired: the
+  // process died or became unreachable. A participant that leaves in order is not reported.
+  // Runs on a Fast DDS thread: hand the news to a thread of your own.
+  std::function<void(const std::string& guid_prefix)> on_participant_dropped;
+};
+
+class Participant {
+ public:
+  static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
+  ~Participant();  // deletes every entity made here, then the participant
+  Participant(const Participant&) = delete;
+  Participant& operator=(const Participant&) = delete;
+
+  // The topic of `name`, registering the type on first use. PubSubType is a fastddsgen
+  // <Type>PubSubType.
+  template <class PubSubType>
+  Result<eprosima::fastdds::dds::Topic*> topic(const std::string& name) {
+    return topic(name, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
+  }
+
+  Result<eprosima::fastdds::dds::DataWriter*> writer(
+      eprosima::fastdds::dds::Topic* topic, const eprosima::fastdds::dds::DataWriterQos& qos,
+      eprosima::fastdds::dds::DataWriterListener* listener = nullptr);
+  // A listener hears only what `mask` names: data available and liveliness changed unless told
+  // otherwise (a wider mask would take callbacks other parts rely on).
+  Result<eprosima::fastdds::dds::DataReader*> reader(
+      eprosima::fastdds::dds::Topic* topic, const eprosima::fastdds::dds::DataReaderQos& qos,
+      eprosima::fastdds::dds::DataReaderListener* listener = nullptr,
+      const eprosima::fastdds::dds::StatusMask& mask =
+          eprosima::fastdds::dds::StatusMask::data_available()
+          << eprosima::fastdds::dds::StatusMask::liveliness_changed());
+
+  // Delete a reader or writer made here (nullptr: nothing); after delete_reader returns no
+  // callback reaches its listener.
+  void delete_reader(eprosima::fastdds::dds::DataReader* reader);
+  void delete_writer(eprosima::fastdds::dds::DataWriter* writer);
+
+  eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
+
+ private:
+  Participant() = default;
+  Result<eprosima::fastdds::dds::Topic*> topic(const std::string& name,
+                                               eprosima::fastdds::dds::TypeSupport type);
+
+  class DiscoveryListener;
+  std::unique_ptr<DiscoveryListener> discovery_listener_;
+  eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
+  eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
+  eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
+  std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+};
+
+}  // namespace teejet::dds

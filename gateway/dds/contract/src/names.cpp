@@ -1,0 +1,91 @@
+#include "teejet/dds/names.hpp"
+
+namespace teejet::dds {
+
+std::string_view to_string(CommandKind kind) {
+  switch (kind) {
+    case COMMAND_STOP:
+      return "stop";
+    case COMMAND_MANUAL:
+      return "manual";
+    case COMMAND_TARGET_DEGREES:
+      return "target_degrees";
+    case COMMAND_DEGREES_FROM_POSITION:
+      return "degrees_from_position";
+    case COMMAND_CLEAR_ERRORS:
+      return "clear_errors";
+    case COMMAND_MILLISECONDS_TO_RUN:
+      return "milliseconds_to_run";
+    case COMMAND_REQUEST:
+      return "request";
+    case COMMAND_SET_BAUD_RATE:
+      return "set_baud_rate";
+    case COMMAND_REQUEST_BAUD_RATE:
+      return "request_baud_rate";
+  }
+  return "unknown_command";
+}
+
+std::string_view to_string(CommandState state) {
+  switch (state) {
+    case COMMAND_ACCEPTED:
+      return "accepted";
+    case COMMAND_REJECTED:
+      return "rejected";
+    case COMMAND_COMPLETED:
+      return "completed";
+    case COMMAND_TIMED_OUT:
+      return "timed_out";
+    case COMMAND_SUPERSEDED:
+      return "superseded";
+  }
+  return "unknown_state";
+}
+
+std::string_view to_string(Direction direction) {
+  switch (direction) {
+    case DIRECTION_OPEN:
+      return "open";
+    case DIRECTION_CLOSE:
+      return "close";
+    case DIRECTION_SHORTEST:
+      return "shortest";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(ErrorKind kind) {
+  switch (kind) {
+    case ERROR_HIGH_VOLTAGE:
+      return "high_voltage";
+    case ERROR_LOW_VOLTAGE:
+      return "low_voltage";
+    case ERROR_HIGH_CURRENT:
+      return "high_current";
+    case ERROR_LOW_CURRENT:
+      return "low_current";
+    case ERROR_HIGH_TEMPERATURE:
+      return "high_temperature";
+    case ERROR_MIN_DEGREES_PER_SECOND:
+      return "min_degrees_per_second";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(BusState state) {
+  switch (state) {
+    case BUS_ERROR_ACTIVE:
+      return "error_active";
+    case BUS_ERROR_WARNING:
+      return "error_warning";
+    case BUS_ERROR_PASSIVE:
+      return "error_passive";
+    case BUS_OFF:
+      return "bus_off";
+    case BUS_DOWN:
+      return "down";
+  }
+  return "unknown";
+}
+
+}  // namespace teejet::dds

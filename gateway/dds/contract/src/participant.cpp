@@ -1,0 +1,140 @@
+#include "teejet/dds/participant.hpp"
+
+#include <cstdlib>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <filesystem>
+#include <mutex>
+#include <set>
+#include <sstream>
+
+namespace teejet::dds {
+
+using namespace eprosima::fastdds::dds;
+
+class Participant::DiscoveryListener final : public DomainParticipantListener {
+ public:
+  explicit DiscoveryListener(std::function<void(const std::string&)> on_dropped)
+      : on_dropped_(std::move(on_dropped)) {}
+
+  void on_participant_discovery(
+      DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT) {
+      return;
+    }
+    std::ostringstream prefix;
+    prefix << info.info.m_guid.guidPrefix;
+    on_dropped_(prefix.str());
+  }
+
+ private:
+  std::function<void(const std::string&)> on_dropped_;
+};
+
+namespace {
+
+std::string canonical(const std::string& path) {
+  std::error_code ignored;
+  const auto resolved = std::filesystem::weakly_canonical(path, ignored);
+  return resolved.empty() ? path : resolved.string();
+}
+
+Error refused(std::string what) { return Error{ErrorCode::kDds, std::move(what)}; }
+
+// Fast DDS keeps profiles process-wide and refuses a file it has loaded before (duplicate
+// transport ids), so each file is loaded once per process, the environment's default included.
+Status load_profiles_once(const std::string& file) {
+  static std::mutex mutex;
+  static std::set<std::string> loaded;
+  std::lock_guard lock(mutex);
+  auto* factory = DomainParticipantFactory::get_instance();
+  if (loaded.empty()) {
+    // Profiles load lazily: without this, default QoS would ignore the XML defaults.
+    factory->load_profiles();
+    if (const char* fallback = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE")) {
+      loaded.insert(canonical(fallback));
+    }
+    loaded.insert("");
+  }
+  if (loaded.contains(canonical(file))) return {};
+  if (factory->load_XML_profiles_file(file) != ReturnCode_t::RETCODE_OK) {
+    return refused("cannot load Fast DDS profiles from '" + file + "'");
+  }
+  loaded.insert(canonical(file));
+  return {};
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOptions& options) {
+  auto* factory = DomainParticipantFactory::get_instance();
+  if (auto loaded = load_profiles_once(options.profile_file); !loaded) return loaded.error();
+  DomainParticipantQos qos = factory->get_default_participant_qos();
+  qos.name(options.name);
+  std::unique_ptr<Participant> made(new Participant());
+  if (options.on_participant_dropped) {
+    made->discovery_listener_ = std::make_unique<DiscoveryListener>(options.on_participant_dropped);
+  }
+  // Discovery callbacks ignore the mask; StatusMask::none() keeps the participant listener
+  // from taking the readers' data-available callbacks.
+  made->participant_ =
+      factory->create_participant(static_cast<DomainId_t>(options.domain), qos,
+                                  made->discovery_listener_.get(), StatusMask::none());
+  if (made->participant_ == nullptr) {
+    return refused("cannot create a DDS participant in domain " + std::to_string(options.domain));
+  }
+  made->publisher_ =
+      made->participant_->create_publisher(made->participant_->get_default_publisher_qos());
+  made->subscriber_ =
+      made->participant_->create_subscriber(made->participant_->get_default_subscriber_qos());
+  if (made->publisher_ == nullptr || made->subscriber_ == nullptr) {
+    return refused("cannot create a DDS publisher or subscriber");
+  }
+  return made;
+}
+
+Participant::~Participant() {
+  if (participant_ == nullptr) return;
+  participant_->delete_contained_entities();
+  DomainParticipantFactory::get_instance()->delete_participant(participant_);
+}
+
+Result<Topic*> Participant::topic(const std::string& name, TypeSupport type) {
+  if (auto it = topics_.find(name); it != topics_.end()) return it->second;
+  if (type.register_type(participant_) != ReturnCode_t::RETCODE_OK &&
+      participant_->find_type(type.get_type_name()).empty()) {
+    return refused("cannot register DDS type " + type.get_type_name());
+  }
+  Topic* topic =
+      participant_->create_topic(name, type.get_type_name(), participant_->get_default_topic_qos());
+  if (topic == nullptr) return refused("cannot create DDS topic " + name);
+  topics_.emplace(name, topic);
+  return topic;
+}
+
+Result<DataWriter*> Participant::writer(Topic* topic, const DataWriterQos& qos,
+                                        DataWriterListener* listener) {
+  DataWriter* writer = publisher_->create_datawriter(topic, qos, listener);
+  if (writer == nullptr) return refused("cannot create a writer for " + topic->get_name());
+  return writer;
+}
+
+Result<DataReader*> Participant::reader(Topic* topic, const DataReaderQos& qos,
+                                        DataReaderListener* listener, const StatusMask& mask) {
+  DataReader* reader = subscriber_->create_datareader(
+      topic, qos, listener, listener == nullptr ? StatusMask::none() : mask);
+  if (reader == nullptr) return refused("cannot create a reader for " + topic->get_name());
+  return reader;
+}
+
+void Participant::delete_reader(DataReader* reader) {
+  if (reader == nullptr) return;
+  reader->set_listener(nullptr);
+  subscriber_->delete_datareader(reader);
+}
+
+void Participant::delete_writer(DataWriter* writer) {
+  if (writer != nullptr) publisher_->delete_datawriter(writer);
+}
+
+}  // namespace teejet::dds

@@ -1,0 +1,75 @@
+#pragma once
+
+// The gateway's writers: the Sink the bridge publishes through. Every sample carries the CAN
+// receive time as its DDS source timestamp too.
+
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <memory>
+#include <tuple>
+#include <variant>
+
+#include "teejet/bridge/bridge.hpp"
+#include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
+
+namespace teejet::dds {
+
+// One writer for each alternative of a sample variant, found by the sample's type. The topic
+// comes from topics::TopicOf<Sample>: a sample type without a topic does not compile.
+template <class Variant>
+class SampleWriters;
+
+template <class... Samples>
+class SampleWriters<std::variant<Samples...>> {
+ public:
+  Status create(Participant& participant, const eprosima::fastdds::dds::DataWriterQos& qos) {
+    Status created;
+    (void)((created = create_one<Samples>(participant, qos), created.ok()) && ...);
+    return created;
+  }
+
+  template <class Sample>
+  eprosima::fastdds::dds::DataWriter* writer() const {
+    return std::get<Slot<Sample>>(writers_).writer;
+  }
+
+ private:
+  template <class Sample>
+  struct Slot {
+    eprosima::fastdds::dds::DataWriter* writer = nullptr;
+  };
+
+  template <class Sample>
+  Status create_one(Participant& participant, const eprosima::fastdds::dds::DataWriterQos& qos) {
+    using Topic = topics::TopicOf<Sample>;
+    auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+    if (!topic) return topic.error();
+    auto writer = participant.writer(*topic, qos);
+    if (!writer) return writer.error();
+    std::get<Slot<Sample>>(writers_).writer = *writer;
+    return {};
+  }
+
+  std::tuple<Slot<Samples>...> writers_;
+};
+
+class GatewayPublisher final : public bridge::Sink {
+ public:
+  static Result<std::unique_ptr<GatewayPublisher>> create(Participant& participant);
+
+  void presence(const ValvePresence& sample) override;
+  void telemetry(const TelemetrySample& sample) override;
+  void error_cleared(std::uint32_t serial, ErrorKind kind) override;
+  void command_status(const CommandStatus& status) override;
+  void gateway_status(const GatewayStatus& status) override;
+
+ private:
+  GatewayPublisher() = default;
+
+  using StateSample = std::variant<ValvePresence, GatewayStatus>;
+  SampleWriters<TelemetrySample> telemetry_;
+  SampleWriters<StateSample> state_;
+  SampleWriters<std::variant<CommandStatus>> command_status_;
+};
+
+}  // namespace teejet::dds

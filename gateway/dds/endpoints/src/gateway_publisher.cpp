@@ -1,0 +1,82 @@
+#include "teejet/dds/gateway_publisher.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+
+namespace teejet::dds {
+
+using namespace eprosima::fastdds::dds;
+
+namespace {
+
+// A failed write loses a sample that consumers expect: say so, without flooding the log.
+void report(DataWriter* writer, const ReturnCode_t& result) {
+  if (result == ReturnCode_t::RETCODE_OK) return;
+  static std::atomic<std::uint64_t> failures{0};
+  const auto count = ++failures;
+  if (count == 1 || count % 1000 == 0) {
+    spdlog::error("DDS write on {} failed (code {}); {} failed write(s) so far",
+                  writer->get_topic()->get_name(), result(), count);
+  }
+}
+
+// Samples carry the CAN receive time as their DDS source timestamp too.
+template <class Sample>
+void write_stamped(DataWriter* writer, Sample sample, std::uint64_t stamp_ns) {
+  const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(stamp_ns / 1'000'000'000),
+                                         static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
+  report(writer, writer->write_w_timestamp(&sample, HANDLE_NIL, stamp));
+}
+
+template <class Sample>
+void write(DataWriter* writer, Sample sample) {
+  report(writer, writer->write(&sample) ? ReturnCode_t::RETCODE_OK : ReturnCode_t::RETCODE_ERROR);
+}
+
+}  // namespace
+
+Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(Participant& participant) {
+  std::unique_ptr<GatewayPublisher> made(new GatewayPublisher());
+  if (auto created = made->telemetry_.create(participant, topics::state_writer_qos()); !created) {
+    return created.error();
+  }
+  if (auto created = made->state_.create(participant, topics::state_writer_qos()); !created) {
+    return created.error();
+  }
+  if (auto created = made->command_status_.create(participant, topics::status_writer_qos());
+      !created) {
+    return created.error();
+  }
+  return made;
+}
+
+void GatewayPublisher::presence(const ValvePresence& sample) {
+  write_stamped(state_.writer<ValvePresence>(), sample, sample.last_seen_ns());
+}
+
+void GatewayPublisher::telemetry(const TelemetrySample& sample) {
+  std::visit(
+      [this](const auto& s) {
+        write_stamped(telemetry_.writer<std::decay_t<decltype(s)>>(), s, s.received_ns());
+      },
+      sample);
+}
+
+void GatewayPublisher::error_cleared(std::uint32_t serial, ErrorKind kind) {
+  DataWriter* writer = telemetry_.writer<ValveError>();
+  ValveError key;
+  key.serial(serial);
+  key.kind(kind);
+  report(writer, writer->dispose(&key, HANDLE_NIL));
+}
+
+void GatewayPublisher::command_status(const CommandStatus& status) {
+  write(command_status_.writer<CommandStatus>(), status);
+}
+
+void GatewayPublisher::gateway_status(const GatewayStatus& status) {
+  write(state_.writer<GatewayStatus>(), status);
+}
+
+}  // namespace teejet::dds

@@ -1,0 +1,126 @@
+#pragma once
+
+// One TeeJet CAN valve as a pure state machine: no threads, no I/O, no clock of its own. Time is
+// passed in; motion is computed in closed form from the start of the running command, so the
+// position at any instant is exact whatever the call pattern. See docs/valve-sim.md.
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "teejet/codec/messages.hpp"
+#include "teejet/core/time.hpp"
+#include "teejet/sim/valve_config.hpp"
+
+namespace teejet::sim {
+
+inline constexpr Duration kIAmHerePeriod = std::chrono::seconds(1);
+inline constexpr Duration kErrorRepeatPeriod = std::chrono::seconds(1);
+inline constexpr Duration kTenthOfSecond = std::chrono::milliseconds(100);
+
+class SimulatedValve {
+ public:
+  // Throws std::invalid_argument when validate(config) fails.
+  explicit SimulatedValve(ValveConfig config);
+
+  // Acts on a controller message received at `now` and returns the immediate replies (none
+  // for the motion commands, Stop and Clear Errors).
+  std::vector<codec::FromValveMessage> handle(const codec::ToValveMessage& message, SteadyTime now);
+
+  // Brings the valve to `now` and returns what falls due by then: I'm Here, latched errors,
+  // automatic resends; each at most once per call, in order of their due times. Periods keep
+  // their phase: a late call skips the missed instants instead of bursting.
+  std::vector<codec::FromValveMessage> advance(SteadyTime now);
+
+  // When advance() next has something to send; nullopt when nothing is scheduled.
+  std::optional<SteadyTime> next_due() const;
+
+  // I'm Here at `first`, then once a second. Called when the valve captures an address.
+  void schedule_i_am_here(SteadyTime first);
+  std::optional<SteadyTime> next_i_am_here() const { return next_i_am_here_; }
+
+  // Latches the error: sent by the next advance() at or after `now`, then once a second until
+  // Clear Errors. Injecting a kind again replaces its values. Throws std::invalid_argument when
+  // validate(error) fails.
+  void inject_error(const InjectedError& error, SteadyTime now);
+
+  // ---- Observation (for tests, logs and embedders); `now` must not precede earlier calls --
+  const ValveConfig& config() const { return config_; }
+  std::uint32_t serial() const { return config_.serial; }
+  double position(SteadyTime now) const;  // degrees, not rounded
+  bool running(SteadyTime now) const;
+  unsigned speed_percent(SteadyTime now) const;              // 0 when stopped
+  codec::Direction direction() const { return direction_; }  // of the last run command
+  double run_time_seconds(SteadyTime now) const;             // not rounded
+  std::uint32_t cycle_count() const { return cycle_count_; }
+  std::uint32_t bit_rate() const { return bit_rate_; }
+  bool error_latched(ErrorKind kind) const;
+  // Resend period of request 0x11..0x18; nullopt when not resending.
+  std::optional<Duration> resend_period(std::uint8_t request_id) const;
+
+  // The telemetry message a request 0x11..0x18 is answered with, as at `now`.
+  codec::FromValveMessage telemetry(std::uint8_t request_id, SteadyTime now) const;
+
+ private:
+  // A run command in progress. The valve turns from start_position at `rate` degrees per second
+  // in direction `sign` for `duration` (nullopt: until told otherwise, a full-turn Manual run)
+  // over `travel` degrees, and then rests at end_position.
+  struct Motion {
+    SteadyTime start{};
+    double start_position = 0.0;
+    int sign = 1;  // +1 opening (degrees increase), -1 closing
+    double rate = 0.0;
+    double travel = 0.0;
+    std::optional<Duration> duration;
+    double end_position = 0.0;
+    unsigned speed_percent = 0;
+  };
+  struct Periodic {
+    Duration period{};
+    SteadyTime next{};
+  };
+  struct Latched {
+    InjectedError error;
+    SteadyTime next{};
+  };
+
+  static constexpr std::uint8_t kFirstTelemetryRequest = 0x11;
+  static constexpr std::size_t kTelemetryRequests = 8;
+
+  double travelled(const Motion& motion, SteadyTime now) const;
+  static Duration driven(const Motion& motion, SteadyTime now);
+  Duration run_time(SteadyTime now) const;
+  bool ran_at_full_speed(SteadyTime now) const;
+  double normalized(double degrees) const;
+  double distance_to_limit(codec::Direction direction) const;
+
+  // Ends a motion that has finished by `now`.
+  void settle(SteadyTime now);
+  // Stops the running motion at `now`, keeping where it got to.
+  void halt(SteadyTime now);
+  // A run command: replaces the running one; speed 0 is Stop.
+  void run(unsigned speed_percent, codec::Direction direction, double travel,
+           std::optional<double> end_position, SteadyTime now);
+  void run_target(const codec::TargetDegrees& command, SteadyTime now);
+  void run_degrees(const codec::DegreesFromPosition& command, SteadyTime now);
+  void run_manual(const codec::Manual& command, SteadyTime now);
+  void run_milliseconds(const codec::MillisecondsToRun& command, SteadyTime now);
+  void request(std::uint8_t request_id, unsigned resend_tenths, SteadyTime now,
+               std::vector<codec::FromValveMessage>& replies);
+
+  ValveConfig config_;
+  double position_ = 0.0;  // while stopped; normalized
+  std::optional<Motion> motion_;
+  codec::Direction direction_ = codec::Direction::kClose;
+  Duration run_time_{0};  // of finished motions
+  std::uint32_t cycle_count_ = 0;
+  bool ran_at_full_speed_ = false;  // last running amps is 0 until then
+  std::uint32_t bit_rate_ = codec::kBitRate250k;
+  std::optional<SteadyTime> next_i_am_here_;
+  std::array<std::optional<Periodic>, kTelemetryRequests> resends_{};
+  std::array<std::optional<Latched>, kErrorKindCount> errors_{};
+};
+
+}  // namespace teejet::sim

@@ -1,0 +1,112 @@
+#pragma once
+
+// The valve simulator at run time: a ValveBank on a can::Bus (SocketCAN or virtual), driven by
+// one thread. Embeddable: the gateway's `--can sim:N`, the demo and the tests run it in-process
+// on a VirtualBus; the valve-sim tool runs it on a SocketCAN interface.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stop_token>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "teejet/can/bus.hpp"
+#include "teejet/codec/codec.hpp"
+#include "teejet/sim/valve_bank.hpp"
+
+namespace spdlog {
+class logger;
+}
+
+namespace teejet::sim {
+
+struct SimulatorOptions {
+  std::vector<ValveConfig> valves;  // powered up by start()
+  std::vector<SerialError> errors;  // latched at power-up
+  std::shared_ptr<const Clock> clock = system_clock();
+  // Log every frame received and sent, candump -L text plus the decoded message, at info level.
+  bool verbose = false;
+  std::shared_ptr<spdlog::logger> logger;  // default: spdlog's default logger
+  // The thread waits for a frame until the next due event, but never longer than this, so
+  // that stop(), add_valve() and inject_error() (and a ManualClock moved by a test) are seen
+  // within this time even on a quiet bus.
+  std::chrono::milliseconds max_wait{50};
+  codec::EncodeOptions encode_options{};
+};
+
+// How long the simulator thread waits for a frame when the next event is due at `next_due`
+// (nullopt: nothing scheduled): until the event, rounded up to a whole millisecond so that it
+// never wakes before the event is due; 0 when it is due already; never longer than `max_wait`.
+std::chrono::milliseconds receive_timeout(std::optional<SteadyTime> next_due, SteadyTime now,
+                                          std::chrono::milliseconds max_wait);
+
+class Simulator {
+ public:
+  // The bus should listen to controller traffic only (can::valve_side_filters()); frames of
+  // other kinds are ignored anyway. It is opened by start() unless already open.
+  Simulator(std::unique_ptr<can::Bus> bus, SimulatorOptions options);
+  ~Simulator();  // stop()
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  // Validates the valves and errors, opens the bus, powers the bank up and starts the thread.
+  // Fails, saying why, without starting anything.
+  Status start();
+  // Stops the thread (within max_wait) and closes the bus. Idempotent; start() may follow.
+  void stop();
+  bool started() const { return thread_.joinable(); }
+
+  // Thread-safe; take effect at the current clock time. The resulting frames are sent by the
+  // simulator thread within max_wait.
+  Status add_valve(const ValveConfig& config, std::vector<AddressChange>* changes = nullptr);
+  Status inject_error(std::uint32_t serial, const InjectedError& error);
+
+  std::vector<Assignment> assignments() const;
+  // Calls fn(const ValveBank&) with the bank locked: inspection for tests and embedders.
+  template <class Fn>
+  auto inspect(Fn&& fn) const {
+    std::lock_guard lock(mutex_);
+    return fn(static_cast<const ValveBank&>(bank_));
+  }
+
+  // Frames taken off the bus and acted on (decoded or not), frames sent, sends that failed.
+  std::uint64_t frames_handled() const { return frames_handled_.load(); }
+  std::uint64_t frames_sent() const { return frames_sent_.load(); }
+  std::uint64_t send_failures() const { return send_failures_.load(); }
+  can::BusStatistics bus_statistics() const { return bus_->statistics(); }
+  const std::string& bus_name() const { return bus_->name(); }
+  const std::shared_ptr<const Clock>& clock() const { return options_.clock; }
+
+ private:
+  void run(const std::stop_token& stop);
+  std::chrono::milliseconds wait_budget() const;
+  void on_frame(const can::TimedFrame& received, std::vector<Outgoing>& out);
+  void send(const Outgoing& outgoing);
+  void log_frame(const char* way, Timestamp at, const codec::CanFrame& frame) const;
+
+  std::unique_ptr<can::Bus> bus_;
+  SimulatorOptions options_;
+  std::shared_ptr<spdlog::logger> logger_;
+
+  mutable std::mutex mutex_;  // guards bank_
+  ValveBank bank_;
+
+  std::jthread thread_;
+  std::atomic<std::uint64_t> frames_handled_{0};
+  std::atomic<std::uint64_t> frames_sent_{0};
+  std::atomic<std::uint64_t> send_failures_{0};
+  bool last_send_failed_ = false;  // simulator thread only
+};
+
+// One line describing a frame as `-v` logs it: candump -L text, then the decoded message,
+// e.g. "(1700000000.000123) vcan0 18EFD5D8#020384FFFFFFFFFF  position degrees=90.0", or the
+// reason it does not decode.
+std::string describe_frame(Timestamp at, const std::string& interface_name,
+                           const codec::CanFrame& frame);
+
+}  // namespace teejet::sim

@@ -1,0 +1,355 @@
+#include "teejet/sim/simulated_valve.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <type_traits>
+
+namespace teejet::sim {
+namespace {
+
+// Distances below this are no movement: positions are doubles, commands come in tenths.
+constexpr double kEpsilonDegrees = 1e-6;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+double in_seconds(Duration duration) { return std::chrono::duration<double>(duration).count(); }
+
+Duration duration_of(double travel, double rate) {
+  return Duration{std::llround(travel / rate * 1e9)};
+}
+
+// x modulo 360 in [0, 360).
+double wrap(double degrees) {
+  double r = std::fmod(degrees, kFullTurnDegrees);
+  if (r < 0.0) r += kFullTurnDegrees;
+  if (r >= kFullTurnDegrees) r -= kFullTurnDegrees;
+  return r;
+}
+
+int sign_of(codec::Direction direction) { return direction == codec::Direction::kOpen ? 1 : -1; }
+
+template <class... Ts>
+struct Overloaded : Ts... {
+  using Ts::operator()...;
+};
+template <class... Ts>
+Overloaded(Ts...) -> Overloaded<Ts...>;
+
+template <class T>
+struct IsTelemetryRequest : std::false_type {};
+template <std::uint8_t Id>
+struct IsTelemetryRequest<codec::TelemetryRequest<Id>> : std::true_type {};
+
+}  // namespace
+
+SimulatedValve::SimulatedValve(ValveConfig config) : config_(std::move(config)) {
+  if (const auto valid = validate(config_); !valid)
+    throw std::invalid_argument(valid.error().reason);
+  position_ = normalized(config_.start_position());
+  bit_rate_ = config_.bit_rate;
+}
+
+// ---- Motion -----------------------------------------------------------------------------------
+
+double SimulatedValve::normalized(double degrees) const {
+  if (config_.full_turn()) return wrap(degrees);
+  return std::clamp(degrees, config_.closed_degrees, config_.opened_degrees);
+}
+
+double SimulatedValve::travelled(const Motion& motion, SteadyTime now) const {
+  return std::min(motion.rate * std::max(0.0, in_seconds(now - motion.start)), motion.travel);
+}
+
+Duration SimulatedValve::driven(const Motion& motion, SteadyTime now) {
+  Duration elapsed = std::max(Duration{0}, now - motion.start);
+  if (motion.duration) elapsed = std::min(elapsed, *motion.duration);
+  return elapsed;
+}
+
+double SimulatedValve::distance_to_limit(codec::Direction direction) const {
+  if (config_.full_turn()) return kInfinity;
+  return direction == codec::Direction::kOpen ? config_.opened_degrees - position_
+                                              : position_ - config_.closed_degrees;
+}
+
+bool SimulatedValve::running(SteadyTime now) const {
+  return motion_ && (!motion_->duration || now < motion_->start + *motion_->duration);
+}
+
+double SimulatedValve::position(SteadyTime now) const {
+  if (!motion_) return position_;
+  if (!running(now)) return motion_->end_position;
+  return normalized(motion_->start_position + motion_->sign * travelled(*motion_, now));
+}
+
+unsigned SimulatedValve::speed_percent(SteadyTime now) const {
+  return running(now) ? motion_->speed_percent : 0;
+}
+
+double SimulatedValve::run_time_seconds(SteadyTime now) const { return in_seconds(run_time(now)); }
+
+Duration SimulatedValve::run_time(SteadyTime now) const {
+  return run_time_ + (motion_ ? driven(*motion_, now) : Duration{0});
+}
+
+bool SimulatedValve::ran_at_full_speed(SteadyTime now) const {
+  return ran_at_full_speed_ ||
+         (motion_ && motion_->speed_percent == 100 && driven(*motion_, now) > Duration{0});
+}
+
+void SimulatedValve::halt(SteadyTime now) {
+  if (!motion_) return;
+  position_ = position(now);
+  run_time_ += driven(*motion_, now);
+  ran_at_full_speed_ = ran_at_full_speed(now);
+  motion_.reset();
+}
+
+void SimulatedValve::settle(SteadyTime now) {
+  if (motion_ && !running(now)) halt(now);
+}
+
+void SimulatedValve::run(unsigned speed_percent, codec::Direction direction, double travel,
+                         std::optional<double> end_position, SteadyTime now) {
+  halt(now);  // a new command replaces the running one
+  speed_percent = std::min(speed_percent, 100u);
+  if (speed_percent == 0) return;  // speed 0 = stop; not a run, not a cycle
+  ++cycle_count_;
+  direction_ = direction;
+  if (!(travel > kEpsilonDegrees)) return;  // already there: counted, nothing to drive
+  Motion motion;
+  motion.start = now;
+  motion.start_position = position_;
+  motion.sign = sign_of(direction);
+  motion.rate = config_.degrees_per_second * speed_percent / 100.0;
+  motion.travel = travel;
+  if (std::isfinite(travel)) motion.duration = duration_of(travel, motion.rate);
+  motion.end_position = end_position ? *end_position : normalized(position_ + motion.sign * travel);
+  motion.speed_percent = speed_percent;
+  motion_ = motion;
+}
+
+void SimulatedValve::run_manual(const codec::Manual& command, SteadyTime now) {
+  halt(now);
+  const double limit = distance_to_limit(command.direction);
+  std::optional<double> end;
+  if (!config_.full_turn()) {
+    end = command.direction == codec::Direction::kOpen ? config_.opened_degrees
+                                                       : config_.closed_degrees;
+  }
+  run(command.speed_percent, command.direction, limit, end, now);
+}
+
+void SimulatedValve::run_target(const codec::TargetDegrees& command, SteadyTime now) {
+  halt(now);
+  if (!config_.full_turn()) {
+    // The sheet: the target is clamped to the limits and the direction picked automatically.
+    const double target =
+        std::clamp(command.degrees, config_.closed_degrees, config_.opened_degrees);
+    const auto direction = target > position_ ? codec::Direction::kOpen : codec::Direction::kClose;
+    run(command.speed_percent, direction, std::abs(target - position_), target, now);
+    return;
+  }
+  const double target = wrap(command.degrees);
+  auto distance = [](double d) {
+    return d < kEpsilonDegrees || d > kFullTurnDegrees - kEpsilonDegrees ? 0.0 : d;
+  };
+  const double opening = distance(wrap(target - position_));
+  const double closing = distance(wrap(position_ - target));
+  codec::Direction direction = codec::Direction::kOpen;
+  switch (command.direction) {
+    case codec::TargetDirection::kOpen:
+      direction = codec::Direction::kOpen;
+      break;
+    case codec::TargetDirection::kClose:
+      direction = codec::Direction::kClose;
+      break;
+    case codec::TargetDirection::kShortest:  // a tie opens
+      direction = closing < opening ? codec::Direction::kClose : codec::Direction::kOpen;
+      break;
+  }
+  run(command.speed_percent, direction, direction == codec::Direction::kOpen ? opening : closing,
+      target, now);
+}
+
+void SimulatedValve::run_degrees(const codec::DegreesFromPosition& command, SteadyTime now) {
+  halt(now);
+  const int sign = sign_of(command.direction);
+  if (config_.full_turn()) {  // without limit checking
+    run(command.speed_percent, command.direction, command.degrees,
+        wrap(position_ + sign * command.degrees), now);
+    return;
+  }
+  const double target = normalized(position_ + sign * command.degrees);
+  run(command.speed_percent, command.direction, std::abs(target - position_), target, now);
+}
+
+void SimulatedValve::run_milliseconds(const codec::MillisecondsToRun& command, SteadyTime now) {
+  halt(now);
+  const unsigned speed = std::min(command.speed_percent, 100u);
+  const double rate = config_.degrees_per_second * speed / 100.0;
+  const double wanted = rate * command.milliseconds / 1000.0;
+  const double limit = distance_to_limit(command.direction);
+  if (wanted >= limit) {  // stops at the limit first
+    run(speed, command.direction, limit,
+        command.direction == codec::Direction::kOpen ? config_.opened_degrees
+                                                     : config_.closed_degrees,
+        now);
+    return;
+  }
+  run(speed, command.direction, wanted, std::nullopt, now);
+  // Exactly the commanded time, not travel / rate recomputed in floating point.
+  if (motion_) motion_->duration = std::chrono::milliseconds(command.milliseconds);
+}
+
+// ---- Messages ---------------------------------------------------------------------------------
+
+codec::FromValveMessage SimulatedValve::telemetry(std::uint8_t request_id, SteadyTime now) const {
+  switch (request_id) {
+    case codec::RequestPosition::kId: {
+      auto tenths = std::llround(position(now) * 10.0);
+      tenths =
+          config_.full_turn() ? (tenths % 3600 + 3600) % 3600 : std::clamp(tenths, 0LL, 3599LL);
+      return codec::Position{static_cast<double>(tenths) / 10.0};
+    }
+    case codec::RequestTemperature::kId:
+      return codec::Temperature{config_.valve_temperature_c, config_.sensor_temperature_c};
+    case codec::RequestVoltage::kId:
+      return codec::Voltage{config_.volts};
+    case codec::RequestCurrent::kId: {
+      const unsigned speed = speed_percent(now);
+      return codec::RunCurrent{config_.running_amps * speed / 100.0,
+                               ran_at_full_speed(now) ? config_.running_amps : 0.0};
+    }
+    case codec::RequestDegreesPerSecond::kId:
+      return codec::DegreesPerSecond{static_cast<unsigned>(std::lround(config_.degrees_per_second)),
+                                     direction_};
+    case codec::RequestSpeedDirection::kId:
+      return codec::SpeedDirection{speed_percent(now), direction_, config_.opening_direction};
+    case codec::RequestRunTime::kId: {
+      const auto whole = std::chrono::duration_cast<std::chrono::seconds>(run_time(now)).count();
+      return codec::RunTime{static_cast<std::uint32_t>(
+          std::min<long long>(whole, std::numeric_limits<std::uint32_t>::max()))};
+    }
+    case codec::RequestCycleCounts::kId:
+      return codec::CycleCounts{cycle_count_};
+    default:
+      throw std::invalid_argument("not a telemetry request id");
+  }
+}
+
+void SimulatedValve::request(std::uint8_t request_id, unsigned resend_tenths, SteadyTime now,
+                             std::vector<codec::FromValveMessage>& replies) {
+  replies.push_back(telemetry(request_id, now));
+  auto& resend = resends_[request_id - kFirstTelemetryRequest];
+  if (resend_tenths == 0) {
+    resend.reset();  // once, and a running resend of this kind ends
+  } else {
+    const Duration period = resend_tenths * kTenthOfSecond;
+    resend = Periodic{period, now + period};
+  }
+}
+
+std::vector<codec::FromValveMessage> SimulatedValve::handle(const codec::ToValveMessage& message,
+                                                            SteadyTime now) {
+  settle(now);
+  std::vector<codec::FromValveMessage> replies;
+  std::visit(Overloaded{
+                 [&](const codec::Stop&) { halt(now); },
+                 [&](const codec::Manual& m) { run_manual(m, now); },
+                 [&](const codec::TargetDegrees& m) { run_target(m, now); },
+                 [&](const codec::DegreesFromPosition& m) { run_degrees(m, now); },
+                 [&](const codec::ClearErrors&) {
+                   for (auto& error : errors_) error.reset();
+                   halt(now);
+                 },
+                 [&](const codec::MillisecondsToRun& m) { run_milliseconds(m, now); },
+                 [&](const codec::RequestVersion&) {
+                   replies.push_back(
+                       codec::VersionInfo{config_.application_version, config_.bootloader_version});
+                 },
+                 [&](const codec::BaudRate& m) {
+                   if (m.action == codec::BaudAction::kSet) bit_rate_ = m.bit_rate;
+                   replies.push_back(codec::BaudRateReply{bit_rate_});
+                 },
+                 [&](const auto& m) {
+                   static_assert(IsTelemetryRequest<std::decay_t<decltype(m)>>::value);
+                   request(std::decay_t<decltype(m)>::kId, m.resend_tenths, now, replies);
+                 },
+             },
+             message);
+  return replies;
+}
+
+void SimulatedValve::schedule_i_am_here(SteadyTime first) { next_i_am_here_ = first; }
+
+void SimulatedValve::inject_error(const InjectedError& error, SteadyTime now) {
+  if (const auto valid = validate(error); !valid) throw std::invalid_argument(valid.error().reason);
+  errors_[static_cast<std::size_t>(error.kind)] = Latched{error, now};
+}
+
+bool SimulatedValve::error_latched(ErrorKind kind) const {
+  return errors_[static_cast<std::size_t>(kind)].has_value();
+}
+
+std::optional<Duration> SimulatedValve::resend_period(std::uint8_t request_id) const {
+  if (request_id < kFirstTelemetryRequest ||
+      request_id >= kFirstTelemetryRequest + kTelemetryRequests) {
+    return std::nullopt;
+  }
+  const auto& resend = resends_[request_id - kFirstTelemetryRequest];
+  return resend ? std::optional(resend->period) : std::nullopt;
+}
+
+std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
+  settle(now);
+  struct Due {
+    SteadyTime at;
+    codec::FromValveMessage message;
+  };
+  std::vector<Due> due;
+  // Fires a periodic event at most once and moves it past `now`, keeping its phase.
+  auto fire = [&](SteadyTime& next, Duration period, auto&& make) {
+    if (next > now) return;
+    due.push_back({next, make()});
+    next += period * ((now - next) / period + 1);
+  };
+  if (next_i_am_here_) {
+    fire(*next_i_am_here_, kIAmHerePeriod, [&] {
+      return codec::IAmHere{config_.part_number, config_.serial, false};
+    });
+  }
+  for (auto& latched : errors_) {
+    if (latched) {
+      fire(latched->next, kErrorRepeatPeriod, [&] { return error_message(latched->error); });
+    }
+  }
+  for (std::size_t i = 0; i < resends_.size(); ++i) {
+    if (auto& resend = resends_[i]) {
+      fire(resend->next, resend->period,
+           [&] { return telemetry(static_cast<std::uint8_t>(kFirstTelemetryRequest + i), now); });
+    }
+  }
+  std::stable_sort(due.begin(), due.end(), [](const Due& a, const Due& b) { return a.at < b.at; });
+  std::vector<codec::FromValveMessage> messages;
+  messages.reserve(due.size());
+  for (auto& item : due) messages.push_back(std::move(item.message));
+  return messages;
+}
+
+std::optional<SteadyTime> SimulatedValve::next_due() const {
+  std::optional<SteadyTime> earliest = next_i_am_here_;
+  auto consider = [&](SteadyTime at) {
+    if (!earliest || at < *earliest) earliest = at;
+  };
+  for (const auto& latched : errors_) {
+    if (latched) consider(latched->next);
+  }
+  for (const auto& resend : resends_) {
+    if (resend) consider(resend->next);
+  }
+  return earliest;
+}
+
+}  // namespace teejet::sim

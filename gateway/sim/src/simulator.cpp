@@ -1,0 +1,230 @@
+#include "teejet/sim/simulator.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <cstdio>
+#include <type_traits>
+#include <variant>
+
+#include "teejet/candump/log_line.hpp"
+
+namespace teejet::sim {
+namespace {
+
+std::string field_text(const codec::FieldValue& value) {
+  return std::visit(
+      [](const auto& v) -> std::string {
+        using T = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, std::string>) {
+          return v;
+        } else if constexpr (std::is_same_v<T, bool>) {
+          return v ? "true" : "false";
+        } else if constexpr (std::is_same_v<T, double>) {
+          std::array<char, 32> text{};
+          std::snprintf(text.data(), text.size(), "%.2f", v);
+          std::string s = text.data();
+          // Trim to the fewest decimals, keeping one: 90.00 -> 90.0, 0.25 -> 0.25.
+          while (s.size() > 1 && s.back() == '0' && s[s.size() - 2] != '.') s.pop_back();
+          return s;
+        } else {
+          return std::to_string(v);
+        }
+      },
+      value);
+}
+
+template <class Message>
+std::string message_text(const Message& message) {
+  std::string text(codec::message_name(message));
+  codec::for_each_field(message, [&](std::string_view name, const codec::FieldValue& value) {
+    text += ' ';
+    text += name;
+    text += '=';
+    text += field_text(value);
+  });
+  return text;
+}
+
+std::string address_text(std::uint8_t address) {
+  std::array<char, 8> text{};
+  std::snprintf(text.data(), text.size(), "0x%02X", address);
+  return text.data();
+}
+
+}  // namespace
+
+std::string describe_frame(Timestamp at, const std::string& interface_name,
+                           const codec::CanFrame& frame) {
+  const auto micros =
+      std::chrono::duration_cast<std::chrono::microseconds>(at.time_since_epoch()).count();
+  const auto seconds = static_cast<std::uint64_t>(micros < 0 ? 0 : micros / 1'000'000);
+  const auto fraction = static_cast<std::uint32_t>(micros < 0 ? 0 : micros % 1'000'000);
+  std::string text = candump::format_log_line(seconds, fraction, interface_name, frame) + "  ";
+  const auto decoded = codec::decode(frame);
+  if (!decoded) return text + "(" + decoded.error().reason + ")";
+  text += address_text(decoded->route.valve_address) + ' ';
+  std::visit([&](const auto& message) { text += message_text(message); }, decoded->message);
+  return text;
+}
+
+Simulator::Simulator(std::unique_ptr<can::Bus> bus, SimulatorOptions options)
+    : bus_(std::move(bus)), options_(std::move(options)) {
+  logger_ = options_.logger ? options_.logger : spdlog::default_logger();
+  if (!options_.clock) options_.clock = system_clock();
+}
+
+Simulator::~Simulator() { stop(); }
+
+Status Simulator::start() {
+  if (started()) return Error{ErrorCode::kUnavailable, "the simulator is already running"};
+  // The valves power up when the bus is open; a trial power-up first refuses a bad bank without
+  // touching the bus.
+  const auto power_up = [this](ValveBank& bank) -> Status {
+    const SteadyTime now = options_.clock->steady();
+    if (const auto powered = bank.power_up(options_.valves, now); !powered) return powered;
+    for (const auto& [serial, error] : options_.errors) {
+      if (const auto injected = bank.inject_error(serial, error, now); !injected) return injected;
+    }
+    return {};
+  };
+  ValveBank trial;
+  if (const auto valid = power_up(trial); !valid) return valid;
+  if (const auto opened = bus_->open(); !opened) {
+    return Error{opened.error().code, "cannot open " + bus_->name() + ": " + opened.error().reason,
+                 opened.error().os_error};
+  }
+  {
+    std::lock_guard lock(mutex_);
+    bank_ = ValveBank{};
+    if (const auto powered = power_up(bank_); !powered) return powered;  // as the trial did
+  }
+  for (const auto& [serial, address] : assignments()) {
+    logger_->info("{} at address {} on {}", codec::format_serial(serial), address_text(address),
+                  bus_->name());
+  }
+  thread_ = std::jthread([this](const std::stop_token& stop) { run(stop); });
+  return {};
+}
+
+void Simulator::stop() {
+  if (thread_.joinable()) {
+    thread_.request_stop();
+    thread_.join();
+    bus_->close();
+  }
+}
+
+Status Simulator::add_valve(const ValveConfig& config, std::vector<AddressChange>* changes) {
+  std::vector<AddressChange> local;
+  auto* out = changes ? changes : &local;
+  {
+    std::lock_guard lock(mutex_);
+    if (const auto added = bank_.add_valve(config, options_.clock->steady(), out); !added) {
+      return added;
+    }
+  }
+  for (const auto& change : *out) {
+    if (change.from) {
+      logger_->info("{} moves from {} to {}", codec::format_serial(change.serial),
+                    address_text(*change.from), address_text(change.to));
+    } else {
+      logger_->info("{} added at {}", codec::format_serial(change.serial), address_text(change.to));
+    }
+  }
+  return {};
+}
+
+Status Simulator::inject_error(std::uint32_t serial, const InjectedError& error) {
+  {
+    std::lock_guard lock(mutex_);
+    if (const auto injected = bank_.inject_error(serial, error, options_.clock->steady());
+        !injected) {
+      return injected;
+    }
+  }
+  logger_->info("{}: {} error latched (value {}, limit {})", codec::format_serial(serial),
+                to_string(error.kind), error.value, error.limit);
+  return {};
+}
+
+std::vector<Assignment> Simulator::assignments() const {
+  std::lock_guard lock(mutex_);
+  return bank_.assignments();
+}
+
+std::chrono::milliseconds receive_timeout(std::optional<SteadyTime> next_due, SteadyTime now,
+                                          std::chrono::milliseconds max_wait) {
+  if (!next_due) return max_wait;
+  const Duration left = *next_due - now;
+  if (left <= Duration{0}) return std::chrono::milliseconds{0};
+  if (left >= max_wait) return max_wait;
+  // Rounded up: waking before the event would only lead to a second, empty wait.
+  return std::chrono::ceil<std::chrono::milliseconds>(left);
+}
+
+std::chrono::milliseconds Simulator::wait_budget() const {
+  std::optional<SteadyTime> due;
+  {
+    std::lock_guard lock(mutex_);
+    due = bank_.next_due();
+  }
+  return receive_timeout(due, options_.clock->steady(), options_.max_wait);
+}
+
+void Simulator::on_frame(const can::TimedFrame& received, std::vector<Outgoing>& out) {
+  if (options_.verbose) log_frame("rx", received.received, received.frame);
+  const auto decoded = codec::decode(received.frame);
+  const auto* message = decoded && decoded->route.flow == codec::Flow::kToValve
+                            ? std::get_if<codec::ToValveMessage>(&decoded->message)
+                            : nullptr;
+  if (message != nullptr) {
+    const SteadyTime now = options_.clock->steady();
+    std::lock_guard lock(mutex_);
+    auto replies = bank_.handle(decoded->route.valve_address, *message, now);
+    for (auto& reply : replies) out.push_back(std::move(reply));
+  }
+  ++frames_handled_;  // after acting on it: a test may move the clock once it sees the count
+}
+
+void Simulator::send(const Outgoing& outgoing) {
+  const auto frame = codec::encode(outgoing.address, outgoing.message, options_.encode_options);
+  if (!frame) {  // a bug: the valves only produce values in the sheet's ranges
+    logger_->error("cannot encode {} from {}: {}", codec::message_name(outgoing.message),
+                   address_text(outgoing.address), frame.error().reason);
+    return;
+  }
+  const auto sent = bus_->send(*frame);
+  if (!sent) {
+    ++send_failures_;
+    // Once per outage, not once per frame: a link that is down would flood the log.
+    if (!last_send_failed_) logger_->warn("{}: send failed: {}", bus_->name(), sent.error().reason);
+    last_send_failed_ = true;
+    return;
+  }
+  if (last_send_failed_) logger_->info("{}: sending again", bus_->name());
+  last_send_failed_ = false;
+  ++frames_sent_;
+  if (options_.verbose) log_frame("tx", options_.clock->wall(), *frame);
+}
+
+void Simulator::log_frame(const char* way, Timestamp at, const codec::CanFrame& frame) const {
+  logger_->info("{} {}", way, describe_frame(at, bus_->name(), frame));
+}
+
+void Simulator::run(const std::stop_token& stop) {
+  std::vector<Outgoing> out;
+  while (!stop.stop_requested()) {
+    const auto received = bus_->receive(wait_budget());
+    out.clear();
+    if (received) on_frame(*received, out);
+    {
+      std::lock_guard lock(mutex_);
+      auto due = bank_.advance(options_.clock->steady());
+      for (auto& message : due) out.push_back(std::move(message));
+    }
+    for (const auto& outgoing : out) send(outgoing);
+  }
+}
+
+}  // namespace teejet::sim

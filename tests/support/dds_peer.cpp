@@ -1,0 +1,90 @@
+#include "support/dds_peer.hpp"
+
+#include <gtest/gtest.h>
+
+#include "support/eventually.hpp"
+
+namespace teejet::testing {
+
+using eprosima::fastdds::dds::PublicationMatchedStatus;
+using eprosima::fastdds::dds::SampleInfo;
+using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
+
+std::nullptr_t DdsPeer::refused(const Error& error) {
+  ADD_FAILURE() << "DDS refused: " << error.reason;
+  return nullptr;
+}
+
+DdsPeer::DdsPeer(int domain, const std::string& name) {
+  auto made = dds::Participant::create({.domain = domain, .name = name});
+  if (!made) {
+    ADD_FAILURE() << "DDS refused: " << made.error().reason;
+    return;
+  }
+  participant_ = std::move(*made);
+  auto commands = participant_->topic<ValveCommandPubSubType>(dds::topics::kCommand);
+  auto statuses = participant_->topic<CommandStatusPubSubType>(dds::topics::kCommandStatus);
+  if (!commands || !statuses) {
+    ADD_FAILURE() << "DDS refused the command topics";
+    return;
+  }
+  // The status reader first: a gateway that matched the command writer has matched it too.
+  if (auto reader = participant_->reader(*statuses, dds::topics::status_reader_qos())) {
+    statuses_ = *reader;
+  }
+  if (auto writer = participant_->writer(*commands, dds::topics::command_writer_qos())) {
+    commands_ = *writer;
+  }
+  if (statuses_ == nullptr || commands_ == nullptr)
+    ADD_FAILURE() << "DDS refused a command endpoint";
+}
+
+bool DdsPeer::write(ValveCommand command) {
+  command.command_id(++next_id_);
+  command.origin("test-peer");
+  return commands_ != nullptr && commands_->write(&command);
+}
+
+std::uint32_t DdsPeer::send(ValveCommand command) {
+  command.command_id(++next_id_);
+  command.origin("test-peer");
+  if (commands_ == nullptr) return command.command_id();
+  EXPECT_TRUE(eventually(
+      [&] {
+        PublicationMatchedStatus matched;
+        commands_->get_publication_matched_status(matched);
+        return matched.current_count > 0;
+      },
+      std::chrono::seconds(15)))
+      << "no gateway's command reader matched";
+  EXPECT_TRUE(commands_->write(&command));
+  return command.command_id();
+}
+
+std::vector<CommandStatus> DdsPeer::follow(std::uint32_t id, std::chrono::milliseconds deadline) {
+  std::vector<CommandStatus> mine;
+  if (statuses_ == nullptr) return mine;
+  eventually(
+      [&] {
+        CommandStatus status;
+        SampleInfo info;
+        while (statuses_->take_next_sample(&status, &info) == ReturnCode::RETCODE_OK) {
+          if (info.valid_data) all_statuses_.push_back(status);
+        }
+        mine.clear();
+        for (const auto& s : all_statuses_) {
+          if (s.command_id() == id && s.origin().to_string() == "test-peer") mine.push_back(s);
+        }
+        return !mine.empty() && mine.back().state() != COMMAND_ACCEPTED;
+      },
+      deadline);
+  return mine;
+}
+
+std::vector<CommandState> DdsPeer::states(const std::vector<CommandStatus>& statuses) {
+  std::vector<CommandState> out;
+  for (const auto& s : statuses) out.push_back(s.state());
+  return out;
+}
+
+}  // namespace teejet::testing

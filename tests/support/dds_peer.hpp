@@ -1,0 +1,73 @@
+#pragma once
+
+// A DDS participant playing an ECU or a bench in tests: reads any topic of the contract, writes
+// commands once a gateway listens, follows their statuses. A refusal of DDS fails the test.
+
+#include <chrono>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
+
+namespace teejet::testing {
+
+class DdsPeer {
+ public:
+  DdsPeer(int domain, const std::string& name);  // ADD_FAILURE()s when DDS refuses
+
+  dds::Participant& participant() { return *participant_; }
+
+  // A reader of Sample's topic (state QoS by default); nullptr after a failure.
+  template <class Sample>
+  eprosima::fastdds::dds::DataReader* reader(
+      const eprosima::fastdds::dds::DataReaderQos& qos = dds::topics::state_reader_qos(),
+      eprosima::fastdds::dds::DataReaderListener* listener = nullptr) {
+    using Topic = dds::topics::TopicOf<Sample>;
+    auto topic = participant_->topic<typename Topic::PubSubType>(Topic::kName);
+    if (!topic) return refused(topic.error());
+    auto made = participant_->reader(*topic, qos, listener);
+    if (!made) return refused(made.error());
+    return *made;
+  }
+
+  // Writes `command` with the next command_id and origin "test-peer" once at least one gateway's
+  // command reader matched; returns the id.
+  std::uint32_t send(ValveCommand command);
+  // The same without waiting for a gateway: for racing one. False when the write failed.
+  bool write(ValveCommand command);
+
+  // The statuses of command `id`, in order, once one is final (or when `deadline` passes).
+  std::vector<CommandStatus> follow(std::uint32_t id,
+                                    std::chrono::milliseconds deadline = std::chrono::seconds(15));
+
+  static std::vector<CommandState> states(const std::vector<CommandStatus>& statuses);
+
+ private:
+  static std::nullptr_t refused(const Error& error);  // fails the test
+
+  std::unique_ptr<dds::Participant> participant_;
+  eprosima::fastdds::dds::DataWriter* commands_ = nullptr;
+  eprosima::fastdds::dds::DataReader* statuses_ = nullptr;
+  std::vector<CommandStatus> all_statuses_;
+  std::uint32_t next_id_ = 0;
+};
+
+// Takes every sample `reader` has and keeps the newest per serial in `seen`; returns `seen`.
+template <class Sample>
+std::map<std::uint32_t, Sample>& latest_by_serial(eprosima::fastdds::dds::DataReader* reader,
+                                                  std::map<std::uint32_t, Sample>& seen) {
+  Sample sample;
+  eprosima::fastdds::dds::SampleInfo info;
+  while (reader->take_next_sample(&sample, &info) ==
+         eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+    if (info.valid_data) seen[sample.serial()] = sample;
+  }
+  return seen;
+}
+
+}  // namespace teejet::testing
