@@ -22,33 +22,39 @@ DdsPeer::DdsPeer(int domain, const std::string& name) {
     return;
   }
   participant_ = std::move(*made);
+}
+
+bool DdsPeer::command_endpoints() {
+  if (commands_ != nullptr) return true;
+  if (!participant_) return false;
+  const auto refused = [](const Error& error) {
+    ADD_FAILURE() << "DDS refused: " << error.reason;
+    return false;
+  };
   auto commands = participant_->topic<ValveCommandPubSubType>(dds::topics::kCommand);
+  if (!commands) return refused(commands.error());
   auto statuses = participant_->topic<CommandStatusPubSubType>(dds::topics::kCommandStatus);
-  if (!commands || !statuses) {
-    ADD_FAILURE() << "DDS refused the command topics";
-    return;
-  }
+  if (!statuses) return refused(statuses.error());
   // The status reader first: a gateway that matched the command writer has matched it too.
-  if (auto reader = participant_->reader(*statuses, dds::topics::status_reader_qos())) {
-    statuses_ = *reader;
-  }
-  if (auto writer = participant_->writer(*commands, dds::topics::command_writer_qos())) {
-    commands_ = *writer;
-  }
-  if (statuses_ == nullptr || commands_ == nullptr)
-    ADD_FAILURE() << "DDS refused a command endpoint";
+  auto reader = participant_->reader(*statuses, dds::topics::status_reader_qos());
+  if (!reader) return refused(reader.error());
+  statuses_ = *reader;
+  auto writer = participant_->writer(*commands, dds::topics::command_writer_qos());
+  if (!writer) return refused(writer.error());
+  commands_ = *writer;
+  return true;
 }
 
 bool DdsPeer::write(ValveCommand command) {
   command.command_id(++next_id_);
   command.origin("test-peer");
-  return commands_ != nullptr && commands_->write(&command);
+  return command_endpoints() && commands_->write(&command);
 }
 
 std::uint32_t DdsPeer::send(ValveCommand command) {
   command.command_id(++next_id_);
   command.origin("test-peer");
-  if (commands_ == nullptr) return command.command_id();
+  if (!command_endpoints()) return command.command_id();
   EXPECT_TRUE(eventually(
       [&] {
         PublicationMatchedStatus matched;

@@ -1,7 +1,9 @@
 #pragma once
 
-// A DDS participant playing an ECU or a bench in tests: reads any topic of the contract, writes
-// commands once a gateway listens, follows their statuses. A refusal of DDS fails the test.
+// A DDS participant playing an ECU, a bench or a logger in tests: reads any topic of the contract,
+// writes commands once a gateway listens, follows their statuses. Its command endpoints exist
+// from its first command on, so a peer that only reads is a reader only. A refusal of DDS fails
+// the test.
 
 #include <chrono>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -49,6 +51,7 @@ class DdsPeer {
 
  private:
   static std::nullptr_t refused(const Error& error);  // fails the test
+  bool command_endpoints();                           // made on first use; false after a failure
 
   std::unique_ptr<dds::Participant> participant_;
   eprosima::fastdds::dds::DataWriter* commands_ = nullptr;

@@ -30,12 +30,11 @@ T must(Result<T> result) {
 ObservedGateway::ObservedGateway(const ObservedGatewayOptions& options) : name_(options.name) {
   const auto config = config_for(options);
   gateway_ = std::make_unique<gateway::Gateway>(config, must(gateway::make_bus_backend(config)));
-  observer_ =
-      must(dds::Participant::create({.domain = options.domain, .name = "command-observer"}));
+  observer_ = std::make_unique<DdsPeer>(options.domain, "command-observer");
   // Subscribed before the gateway runs, so that no status of a test's command is missed.
-  must(observer_->reader(
-      must(observer_->topic<CommandStatusPubSubType>(dds::topics::kCommandStatus)),
-      dds::topics::status_reader_qos(), this));
+  if (observer_->reader<CommandStatus>(dds::topics::status_reader_qos(), this) == nullptr) {
+    throw std::runtime_error("cannot subscribe to command statuses");
+  }
   if (const auto started = gateway_->start(); !started) {
     throw std::runtime_error(started.error().reason);
   }

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "gateway.hpp"
+#include "support/dds_peer.hpp"
 #include "teejet/can/virtual_bus.hpp"
-#include "teejet/dds/participant.hpp"
 
 namespace teejet::testing {
 
@@ -51,7 +51,7 @@ class ObservedGateway : eprosima::fastdds::dds::DataReaderListener {
   std::unique_ptr<gateway::Gateway> gateway_;
   // On the simulator's bus, for valves that announce themselves and fall silent.
   std::unique_ptr<can::VirtualBus> silent_bus_;
-  std::unique_ptr<dds::Participant> observer_;
+  std::unique_ptr<DdsPeer> observer_;
 
   mutable std::mutex mutex_;
   std::vector<CommandStatus> commands_;
