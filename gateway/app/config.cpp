@@ -3,6 +3,7 @@
 #include <map>
 
 #include "teejet/codec/codec.hpp"
+#include "teejet/dds/participant.hpp"
 #include "teejet/yaml/reader.hpp"
 
 namespace teejet::gateway {
@@ -87,7 +88,8 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
   if (g["name"]) config.bridge.gateway_name = reader.scalar(g["name"], "gateway.name");
   if (g["can"]) config.can = reader.scalar(g["can"], "gateway.can");
   if (g["domain"]) {
-    config.domain = static_cast<int>(reader.integer(g["domain"], "gateway.domain", 0, kMaxDomain));
+    config.domain =
+        static_cast<int>(reader.integer(g["domain"], "gateway.domain", 0, dds::kMaxDomain));
   }
   if (g["profile"]) config.profile_file = reader.scalar(g["profile"], "gateway.profile");
   if (g["offline_after_s"]) {

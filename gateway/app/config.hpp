@@ -15,9 +15,6 @@ namespace teejet::gateway {
 
 enum class OnCommanderLost { kStopItsValves, kIgnore };
 
-// The highest DDS domain id (the RTPS port formula's limit with the default port parameters).
-inline constexpr int kMaxDomain = 232;
-
 struct GatewayConfig {
   std::string can = "";  // SocketCAN interface, "virtual:NAME", or "sim:N"
   int domain = 0;

@@ -92,11 +92,14 @@ Duration Gateway::until_next_deadline() const {
 
 void Gateway::read_bus(std::stop_token stop) {
   while (!stop.stop_requested()) {
-    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(until_next_deadline());
+    const Duration left = until_next_deadline();
+    if (left <= Duration{0}) {
+      bridge_->tick();
+      log_changes();  // at least once a second, never per frame
+      continue;
+    }
+    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(left);
     if (auto frame = backend_.bus->receive(wait)) bridge_->on_frame(*frame);
-    if (clock_->steady() < bridge_->next_deadline()) continue;
-    bridge_->tick();
-    log_changes();  // at least once a second, never per frame
   }
 }
 
@@ -109,7 +112,7 @@ void Gateway::take_commands(std::stop_token stop) {
       bridge_->on_command(received.command, received.writer);
     }
     for (const auto& commander : events.lost_commanders) commander_lost(commander);
-    if (clock_->steady() >= bridge_->next_deadline()) bridge_->tick();
+    if (until_next_deadline() <= Duration{0}) bridge_->tick();
   }
 }
 

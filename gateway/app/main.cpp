@@ -30,7 +30,8 @@ int main(int argc, char** argv) {
   app.add_option("--can", can,
                  "SocketCAN interface (can0, vcan0), or sim:N for N simulated valves in-process")
       ->type_name("IFACE|sim:N");
-  app.add_option("--domain", domain, "DDS domain id")->check(CLI::Range(0, 232));
+  app.add_option("--domain", domain, "DDS domain id")
+      ->check(CLI::Range(0, teejet::dds::kMaxDomain));
   app.add_option("--profile", profile, "Fast DDS XML profile file")->check(CLI::ExistingFile);
   app.add_option("-c,--config", config_file, "YAML configuration (docs/gateway.md)")
       ->check(CLI::ExistingFile);

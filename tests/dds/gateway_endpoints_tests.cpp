@@ -112,6 +112,18 @@ class GatewayEndpointsTest : public ::testing::Test {
   std::shared_ptr<LostCommanders> lost = std::make_shared<LostCommanders>();
 };
 
+// Fast DDS 2.9 ends the whole process for a domain its port formula cannot map; the participant
+// refuses it first, so a bad --domain or configuration is an error, not a silent exit(1).
+TEST(Participant, ADomainOutsideZeroTo232IsRefusedNotFatal) {
+  for (const int domain : {-1, 233, 1000}) {
+    const auto refused = Participant::create({.domain = domain});
+    ASSERT_FALSE(refused) << domain;
+    EXPECT_EQ(refused.error().code, ErrorCode::kOutOfRange);
+    EXPECT_EQ(refused.error().reason,
+              "DDS domain " + std::to_string(domain) + " is outside 0 to 232");
+  }
+}
+
 TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
   publisher->presence(presence(1, 0xD8));
   publisher->presence(presence(2, 0xD9));

@@ -9,6 +9,7 @@
 #include "names.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/conversions.hpp"
+#include "teejet/dds/participant.hpp"
 
 namespace teejet::valvectl {
 namespace {
@@ -112,7 +113,7 @@ void define(Parser& parser) {
   app.fallthrough();
   app.add_option("--domain", global.domain, "DDS domain of the gateway")
       ->capture_default_str()
-      ->check(CLI::Range(0, 232));
+      ->check(CLI::Range(0, dds::kMaxDomain));
   app.add_option("--profile", global.profile_file, "Fast DDS XML profiles file, as the gateway's")
       ->check(CLI::ExistingFile);
   app.add_flag("--json", global.json, "machine-readable output: JSON objects and arrays");

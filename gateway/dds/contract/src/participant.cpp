@@ -67,6 +67,11 @@ Status load_profiles_once(const std::string& file) {
 }  // namespace
 
 Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOptions& options) {
+  // Fast DDS 2.9 ends the process (exit(1)) for a domain its port formula cannot map.
+  if (options.domain < 0 || options.domain > kMaxDomain) {
+    return Error{ErrorCode::kOutOfRange, "DDS domain " + std::to_string(options.domain) +
+                                             " is outside 0 to " + std::to_string(kMaxDomain)};
+  }
   auto* factory = DomainParticipantFactory::get_instance();
   if (auto loaded = load_profiles_once(options.profile_file); !loaded) return loaded.error();
   DomainParticipantQos qos = factory->get_default_participant_qos();

@@ -21,6 +21,9 @@
 
 namespace teejet::dds {
 
+// The highest domain id: with the default port parameters, the RTPS port formula's limit.
+inline constexpr int kMaxDomain = 232;
+
 struct ParticipantOptions {
   int domain = 0;
   std::string profile_file;  // Fast DDS XML profiles, loaded before any default QoS is read
