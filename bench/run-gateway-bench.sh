@@ -55,15 +55,8 @@ stop_started() {
   for pid in "${started[@]}"; do stop_process "$pid"; done
   started=()
 }
-# eventually SECONDS COMMAND...: polls COMMAND until it succeeds; false when SECONDS pass first.
-eventually() {
-  local deadline=$((SECONDS + $1))
-  shift
-  until "$@"; do
-    [ "$SECONDS" -ge "$deadline" ] && return 1
-    sleep 0.1
-  done
-}
+# shellcheck source=tools/lib/eventually.sh
+source "$root/tools/lib/eventually.sh"
 # shellcheck disable=SC2317 # invoked via eventually
 gone() { ! kill -0 "$1" 2>/dev/null; }
 # SIGTERM (the gateway then stops its valves and leaves DDS), SIGKILL if it hangs.
