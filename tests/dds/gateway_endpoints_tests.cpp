@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include "support/dds_peer.hpp"
@@ -122,6 +123,22 @@ TEST(Participant, ADomainOutsideZeroTo232IsRefusedNotFatal) {
     EXPECT_EQ(refused.error().reason,
               "DDS domain " + std::to_string(domain) + " is outside 0 to 232");
   }
+}
+
+// The programs' stdout carries data (valvectl --json): Fast DDS's own complaints go to stderr.
+TEST(Participant, FastDdsLogLinesGoToStderrNotStdout) {
+  ::testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStderr();
+  const auto refused =
+      Participant::create({.domain = test_domain(), .profile_file = "/nonexistent/profile.xml"});
+  eprosima::fastdds::dds::Log::Flush();
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().reason,
+            "cannot load Fast DDS profiles from '/nonexistent/profile.xml'");
+  EXPECT_EQ(out, "");
+  EXPECT_NE(err.find("/nonexistent/profile.xml"), std::string::npos) << err;
 }
 
 TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {

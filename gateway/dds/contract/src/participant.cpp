@@ -3,10 +3,16 @@
 #include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <fastdds/dds/log/Log.hpp>
+#include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <filesystem>
 #include <mutex>
 #include <set>
 #include <sstream>
+
+#if TEEJET_DDS_TYPE_OBJECTS
+#include "teejet/valveTypeObject.h"
+#endif
 
 namespace teejet::dds {
 
@@ -64,6 +70,23 @@ Status load_profiles_once(const std::string& file) {
   return {};
 }
 
+// Process-wide set-up before the first participant, while no Fast DDS thread runs yet.
+void prepare_process() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    // Fast DDS logs to stdout by default; our programs' stdout carries data (valvectl --json).
+    auto to_stderr = std::make_unique<eprosima::fastdds::dds::StdoutErrConsumer>();
+    to_stderr->stderr_threshold(Log::Kind::Info);
+    Log::ClearConsumers();
+    Log::RegisterConsumer(std::move(to_stderr));
+#if TEEJET_DDS_TYPE_OBJECTS
+    // A remote COMPLETE TypeObject makes a receive thread use TypeObjectFactory; its first
+    // use (the singleton's construction) must not race that.
+    registervalveTypes();
+#endif
+  });
+}
+
 }  // namespace
 
 Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOptions& options) {
@@ -72,6 +95,7 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
     return Error{ErrorCode::kOutOfRange, "DDS domain " + std::to_string(options.domain) +
                                              " is outside 0 to " + std::to_string(kMaxDomain)};
   }
+  prepare_process();
   auto* factory = DomainParticipantFactory::get_instance();
   if (auto loaded = load_profiles_once(options.profile_file); !loaded) return loaded.error();
   DomainParticipantQos qos = factory->get_default_participant_qos();

@@ -4,6 +4,8 @@
 // (factory -> participant -> register type -> topic -> writer/reader) and torn down in reverse.
 // Shared by the gateway, valvectl, the benchmarks and the tests. Nothing here throws: whatever
 // the middleware refuses comes back as an Error (ErrorCode::kDds) naming what was refused.
+// The first participant of a process sends Fast DDS's own log lines to stderr (stdout carries
+// the programs' data).
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
