@@ -53,7 +53,8 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
   backend.simulator = std::make_unique<sim::Simulator>(
       std::make_unique<can::VirtualBus>(bus_name,
                                         can::VirtualBusOptions{can::valve_side_filters()}),
-      sim::SimulatorOptions{.valves = simulated_valves(config, **simulated)});
+      sim::SimulatorOptions{.valves = simulated_valves(config, **simulated),
+                            .errors = config.sim_errors});
   backend.bus = can::make_bus("virtual:" + bus_name, can::controller_side_filters());
   return backend;
 }

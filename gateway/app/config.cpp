@@ -151,7 +151,7 @@ void read_valves(const Reader& reader, const YAML::Node& v, GatewayConfig& confi
 }
 
 void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& config) {
-  reader.expect_keys(s, "simulator", {"first_serial", "dps", "closed_deg", "opened_deg"});
+  reader.expect_keys(s, "simulator", {"first_serial", "dps", "closed_deg", "opened_deg", "errors"});
   if (s["first_serial"]) {
     const auto serial =
         codec::parse_serial(reader.scalar(s["first_serial"], "simulator.first_serial"));
@@ -165,6 +165,15 @@ void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& co
   }
   if (s["opened_deg"]) {
     config.sim_opened_degrees = reader.number(s["opened_deg"], "simulator.opened_deg", 0, 360);
+  }
+  if (const auto errors = s["errors"]) {
+    reader.expect_list(errors, "simulator.errors", "errors (SERIAL:KIND:VALUE:LIMIT[:DIRECTION])");
+    config.sim_errors.clear();
+    for (const auto& entry : errors) {
+      const auto error = sim::parse_error_spec(reader.scalar(entry, "simulator.errors"));
+      if (!error) reader.fail(entry, "simulator.errors", error.error().reason);
+      config.sim_errors.push_back(*error);
+    }
   }
 }
 

@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/core/result.hpp"
+#include "teejet/sim/valve_config.hpp"
 
 namespace teejet::gateway {
 
@@ -26,6 +28,7 @@ struct GatewayConfig {
   double sim_degrees_per_second = 90.0;
   double sim_closed_degrees = 0.0;
   double sim_opened_degrees = 90.0;
+  std::vector<sim::SerialError> sim_errors;  // latched at power-up, as valve-sim --inject-error
   bridge::BridgeConfig bridge;
 };
 

@@ -139,6 +139,21 @@ TEST(GatewayConfig, EveryNumberHasItsRange) {
   EXPECT_EQ(edges.bridge.offline_after, 1ms);
 }
 
+TEST(GatewayConfig, SimulatedValvesMayStartWithLatchedErrors) {
+  const auto config = parse(
+      "simulator: {errors: [\"TJV000002:high-voltage:16.2:15.5\", \"3:min-dps:20:30:close\"]}");
+  ASSERT_EQ(config.sim_errors.size(), 2u);
+  EXPECT_EQ(config.sim_errors[0],
+            (sim::SerialError{2, {sim::ErrorKind::kHighVoltage, 16.2, 15.5}}));
+  EXPECT_EQ(config.sim_errors[1].error.direction, codec::Direction::kClose);
+  EXPECT_EQ(error_of("simulator: {errors: [\"2:sparks:1:2\"]}"),
+            "test.yaml:1: simulator.errors: '2:sparks:1:2': unknown error kind 'sparks' "
+            "(high-voltage, low-voltage, high-current, low-current, high-temperature, min-dps)");
+  EXPECT_EQ(error_of("simulator: {errors: TJV000002}"),
+            "test.yaml:1: simulator.errors: expected a list of errors "
+            "(SERIAL:KIND:VALUE:LIMIT[:DIRECTION])");
+}
+
 TEST(GatewayConfig, SimulatedValveCount) {
   EXPECT_EQ(*simulated_valve_count("can0"), std::nullopt);
   EXPECT_EQ(*simulated_valve_count("sim:4"), 4);
