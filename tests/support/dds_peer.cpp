@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include "support/eventually.hpp"
 
 namespace teejet::testing {
@@ -15,7 +17,18 @@ std::nullptr_t DdsPeer::refused(const Error& error) {
   return nullptr;
 }
 
-DdsPeer::DdsPeer(int domain, const std::string& name) {
+namespace {
+
+// Statuses are TRANSIENT_LOCAL: each peer has an origin of its own, so that a peer never takes
+// an earlier peer's statuses (same command ids) for its own.
+std::string unique_origin(const std::string& name) {
+  static std::atomic<int> peers{0};
+  return "test-peer:" + name + ":" + std::to_string(++peers);
+}
+
+}  // namespace
+
+DdsPeer::DdsPeer(int domain, const std::string& name) : origin_(unique_origin(name)) {
   auto made = dds::Participant::create({.domain = domain, .name = name});
   if (!made) {
     ADD_FAILURE() << "DDS refused: " << made.error().reason;
@@ -47,13 +60,13 @@ bool DdsPeer::command_endpoints() {
 
 bool DdsPeer::write(ValveCommand command) {
   command.command_id(++next_id_);
-  command.origin("test-peer");
+  command.origin(origin_);
   return command_endpoints() && commands_->write(&command);
 }
 
 std::uint32_t DdsPeer::send(ValveCommand command) {
   command.command_id(++next_id_);
-  command.origin("test-peer");
+  command.origin(origin_);
   if (!command_endpoints()) return command.command_id();
   EXPECT_TRUE(eventually(
       [&] {
@@ -79,7 +92,7 @@ std::vector<CommandStatus> DdsPeer::follow(std::uint32_t id, std::chrono::millis
         }
         mine.clear();
         for (const auto& s : all_statuses_) {
-          if (s.command_id() == id && s.origin().to_string() == "test-peer") mine.push_back(s);
+          if (s.command_id() == id && s.origin().to_string() == origin_) mine.push_back(s);
         }
         return !mine.empty() && mine.back().state() != COMMAND_ACCEPTED;
       },

@@ -37,8 +37,8 @@ class DdsPeer {
     return *made;
   }
 
-  // Writes `command` with the next command_id and origin "test-peer" once at least one gateway's
-  // command reader matched; returns the id.
+  // Writes `command` with the next command_id and this peer's origin once at least one
+  // gateway's command reader matched; returns the id.
   std::uint32_t send(ValveCommand command);
   // The same without waiting for a gateway: for racing one. False when the write failed.
   bool write(ValveCommand command);
@@ -53,6 +53,7 @@ class DdsPeer {
   static std::nullptr_t refused(const Error& error);  // fails the test
   bool command_endpoints();                           // made on first use; false after a failure
 
+  const std::string origin_;  // "test-peer:<name>:<n>", unique in the process
   std::unique_ptr<dds::Participant> participant_;
   eprosima::fastdds::dds::DataWriter* commands_ = nullptr;
   eprosima::fastdds::dds::DataReader* statuses_ = nullptr;

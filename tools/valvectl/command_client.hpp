@@ -34,9 +34,9 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   CommandClient& operator=(const CommandClient&) = delete;
 
   // Waits until `gateways` gateways (at least one) match the status reader, then creates the
-  // command writer and waits until they match it too. Status is VOLATILE, so a status written
-  // before the gateway knows this reader would be lost: announcing the writer only after the
-  // reader has matched gives the gateway a discovery round-trip to learn of the reader first.
+  // command writer and waits until they match it too. Announcing the writer only after the
+  // reader has matched gives the gateway a discovery round-trip to learn of the reader before it
+  // writes a status (which is TRANSIENT_LOCAL as well, for the half-matched moment left).
   // False when not even one gateway matched both by `until` or when interrupted; an Error when
   // DDS refused the writer.
   Result<bool> connect(std::size_t gateways, Deadline until, const std::atomic<bool>& interrupted);

@@ -61,10 +61,10 @@ DataReaderQos command_reader_qos() {
 }
 
 DataWriterQos status_writer_qos() {
-  return reliable<DataWriterQos>(VOLATILE_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 32);
+  return reliable<DataWriterQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 32);
 }
 DataReaderQos status_reader_qos() {
-  return reliable<DataReaderQos>(VOLATILE_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 32);
+  return reliable<DataReaderQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 32);
 }
 
 }  // namespace teejet::dds::topics

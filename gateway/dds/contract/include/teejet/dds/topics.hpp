@@ -68,8 +68,11 @@ eprosima::fastdds::dds::DataReaderQos state_reader_qos();
 eprosima::fastdds::dds::DataWriterQos command_writer_qos();
 eprosima::fastdds::dds::DataReaderQos command_reader_qos();
 
-// Command status: RELIABLE, VOLATILE, KEEP_LAST 32 per valve: a reader that keeps up sees every
-// transition; one that does not never stalls the gateway.
+// Command status: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 32 per valve: a reader that keeps up sees
+// every transition; one that does not never stalls the gateway; and one that the gateway matched
+// a moment before the reader matched the gateway still gets its ACCEPTED (the two sides of a
+// match do not happen at once: a VOLATILE reader starts after the first heartbeat it hears and
+// loses what that heartbeat already counted; measured with CycloneDDS 0.10, issue 8).
 eprosima::fastdds::dds::DataWriterQos status_writer_qos();
 eprosima::fastdds::dds::DataReaderQos status_reader_qos();
 
