@@ -27,6 +27,10 @@ PACKAGES=(
   libfastrtps-dev
   libfastcdr-dev
   fastdds-tools
+  # a second DDS vendor for the mixed-vendor tests (tests/interop): CycloneDDS
+  # 0.10 and its IDL compiler idlc
+  cyclonedds-dev
+  cyclonedds-tools
   # tests and benchmarks
   libgtest-dev
   libgmock-dev
