@@ -1,5 +1,6 @@
 #include "gateway.hpp"
 
+#include <pthread.h>
 #include <spdlog/spdlog.h>
 
 namespace teejet::gateway {
@@ -11,6 +12,8 @@ using namespace std::chrono_literals;
 constexpr Duration kDecodeReportPeriod = 10s;
 // Longest wait of either thread: the bridge has a deadline at least once a second anyway.
 constexpr Duration kLongestWait = 1s;
+// Frames handed to the bridge at once at most: bounds the time the bridge's lock is held.
+constexpr std::size_t kReceiveBatch = 64;
 
 }  // namespace
 
@@ -56,6 +59,9 @@ Status Gateway::start() {
   next_decode_report_ = clock_->steady();
   reader_ = std::jthread([this](std::stop_token stop) { read_bus(stop); });
   commander_ = std::jthread([this](std::stop_token stop) { take_commands(stop); });
+  // Named for top -H, perf and the benchmarks' per-thread CPU figures (15 characters at most).
+  pthread_setname_np(reader_.native_handle(), "tj-bus-reader");
+  pthread_setname_np(commander_.native_handle(), "tj-commands");
   spdlog::info("gateway '{}' on {} in DDS domain {}", config_.bridge.gateway_name, config_.can,
                config_.domain);
   return {};
@@ -90,7 +96,10 @@ Duration Gateway::until_next_deadline() const {
   return std::clamp(bridge_->next_deadline() - clock_->steady(), Duration{0}, kLongestWait);
 }
 
+// Frames are taken in bursts: one wake-up, one lock and one look at the deadlines per burst.
 void Gateway::read_bus(std::stop_token stop) {
+  std::vector<can::TimedFrame> frames;
+  frames.reserve(kReceiveBatch);
   while (!stop.stop_requested()) {
     const Duration left = until_next_deadline();
     if (left <= Duration{0}) {
@@ -98,8 +107,9 @@ void Gateway::read_bus(std::stop_token stop) {
       log_changes();  // at least once a second, never per frame
       continue;
     }
+    frames.clear();
     const auto wait = std::chrono::ceil<std::chrono::milliseconds>(left);
-    if (auto frame = backend_.bus->receive(wait)) bridge_->on_frame(*frame);
+    if (backend_.bus->receive_batch(frames, kReceiveBatch, wait) > 0) bridge_->on_frames(frames);
   }
 }
 

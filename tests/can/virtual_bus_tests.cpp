@@ -3,6 +3,7 @@
 #include <atomic>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "support/eventually.hpp"
 #include "teejet/can/virtual_bus.hpp"
@@ -119,6 +120,44 @@ TEST_F(VirtualBusTest, FullQueueDropsAndCountsLikeTheKernel) {
   EXPECT_EQ(b.statistics().rx_dropped, 2u);
   for (int i = 0; i < 3; ++i) EXPECT_TRUE(b.receive(0ms));
   EXPECT_FALSE(b.receive(0ms));
+}
+
+// A burst sent as one batch arrives in order and leaves in one receive_batch, as far as `max`
+// allows; frames the queue cannot hold are dropped and counted as if sent one by one.
+TEST_F(VirtualBusTest, BatchesKeepOrderRespectMaxAndCountDrops) {
+  VirtualBus a(bus_name), b(bus_name, {.queue_limit = 4});
+  ASSERT_TRUE(a.open());
+  ASSERT_TRUE(b.open());
+  const std::vector<codec::CanFrame> burst{position_from(0xD8, 1.0), position_from(0xD9, 2.0),
+                                           position_from(0xDA, 3.0), position_from(0xDB, 4.0),
+                                           position_from(0xDC, 5.0), position_from(0xDD, 6.0)};
+  const auto sent = a.send_batch(burst);
+  EXPECT_TRUE(sent.status);
+  EXPECT_EQ(sent.sent, 6u);
+  EXPECT_EQ(a.statistics().frames_out, 6u);
+  EXPECT_EQ(b.statistics().rx_dropped, 2u);
+
+  std::vector<TimedFrame> got;
+  EXPECT_EQ(b.receive_batch(got, 3, 1s), 3u);
+  EXPECT_EQ(b.receive_batch(got, 3, 1s), 1u);
+  EXPECT_EQ(b.receive_batch(got, 3, 0ms), 0u);
+  ASSERT_EQ(got.size(), 4u);
+  for (std::size_t i = 0; i < got.size(); ++i) EXPECT_EQ(got[i].frame, burst[i]) << i;
+  EXPECT_EQ(b.statistics().frames_in, 4u);
+}
+
+TEST_F(VirtualBusTest, ABatchOnALinkThatIsDownSendsNothing) {
+  VirtualBus a(bus_name), b(bus_name);
+  ASSERT_TRUE(a.open());
+  ASSERT_TRUE(b.open());
+  VirtualBus::set_link_up(bus_name, false);
+  const std::vector<codec::CanFrame> burst{stop_to(0xD8), stop_to(0xD9)};
+  const auto sent = a.send_batch(burst);
+  EXPECT_EQ(sent.sent, 0u);
+  ASSERT_FALSE(sent.status);
+  EXPECT_EQ(sent.status.error().os_error, ENETDOWN);
+  std::vector<TimedFrame> got;
+  EXPECT_EQ(b.receive_batch(got, 8, 0ms), 0u);
 }
 
 TEST_F(VirtualBusTest, LinkDownRefusesSendsVisiblyAndRecovers) {

@@ -57,9 +57,13 @@ Bridge::~Bridge() = default;
 
 // ---- Frames from the bus ------------------------------------------------------------------
 
-void Bridge::on_frame(const can::TimedFrame& frame) {
-  const auto decoded = codec::decode(frame.frame);
+void Bridge::on_frames(std::span<const can::TimedFrame> frames) {
   std::lock_guard lock(mutex_);
+  for (const auto& frame : frames) handle_frame(frame);
+}
+
+void Bridge::handle_frame(const can::TimedFrame& frame) {
+  const auto decoded = codec::decode(frame.frame);
   if (!decoded) {
     ++counters_.decode_errors;
     counters_.last_decode_error = decoded.error().reason;

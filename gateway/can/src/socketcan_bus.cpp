@@ -361,6 +361,26 @@ std::optional<TimedFrame> SocketCanBus::receive(std::chrono::milliseconds timeou
   }
 }
 
+// recvmmsg already reads the kernel's queue in batches; the frames it read beyond the first
+// leave together.
+std::size_t SocketCanBus::receive_batch(std::vector<TimedFrame>& out, std::size_t max,
+                                        std::chrono::milliseconds timeout) {
+  if (max == 0) return 0;
+  auto first = receive(timeout);
+  if (!first) return 0;
+  out.push_back(std::move(*first));
+  std::size_t taken = 1;
+  State& s = *state_;
+  std::lock_guard lock(s.mutex);
+  while (taken < max && !s.pending.empty()) {
+    out.push_back(std::move(s.pending.front()));
+    s.pending.pop_front();
+    ++s.counters.frames_in;
+    ++taken;
+  }
+  return taken;
+}
+
 BusStatistics SocketCanBus::statistics() const {
   State& s = *state_;
   std::lock_guard lock(s.mutex);

@@ -67,44 +67,55 @@ void VirtualBus::close() {
 }
 
 Status VirtualBus::send(const codec::CanFrame& frame) {
+  auto sent = send_batch(std::span(&frame, 1));
+  return sent.status;
+}
+
+VirtualBus::BatchSent VirtualBus::send_batch(std::span<const codec::CanFrame> frames) {
   std::shared_ptr<Medium> medium;
   {
     std::lock_guard lock(mutex_);
-    if (!open_) return Error{ErrorCode::kUnavailable, name_ + ": bus is not open"};
+    if (!open_) return {0, Error{ErrorCode::kUnavailable, name_ + ": bus is not open"}};
     medium = medium_;
   }
   std::lock_guard medium_lock(medium->mutex);
   if (!medium->link_up) {
     std::lock_guard lock(mutex_);
     ++statistics_.tx_failed;
-    return Error{ErrorCode::kUnavailable, name_ + ": link is down", ENETDOWN};
+    return {0, Error{ErrorCode::kUnavailable, name_ + ": link is down", ENETDOWN}};
   }
   for (VirtualBus* endpoint : medium->endpoints) {
-    if (endpoint != this) endpoint->deliver(frame);
+    if (endpoint != this) endpoint->deliver(frames);
   }
   std::lock_guard lock(mutex_);
-  ++statistics_.frames_out;
-  return {};
+  statistics_.frames_out += frames.size();
+  return {frames.size(), {}};
 }
 
-void VirtualBus::inject(const codec::CanFrame& frame) { deliver(frame); }
+void VirtualBus::inject(const codec::CanFrame& frame) { deliver(std::span(&frame, 1)); }
 
-void VirtualBus::deliver(const codec::CanFrame& frame) {
+void VirtualBus::deliver(std::span<const codec::CanFrame> frames) {
   const auto& filters = options_.filters;
-  if (!filters.empty() && std::none_of(filters.begin(), filters.end(),
-                                       [&](const Filter& f) { return f.matches(frame); })) {
-    return;
-  }
+  const auto accepted = [&](const codec::CanFrame& frame) {
+    return filters.empty() || std::any_of(filters.begin(), filters.end(),
+                                          [&](const Filter& f) { return f.matches(frame); });
+  };
+  bool queued = false;
   {
     std::lock_guard lock(mutex_);
     if (!open_) return;
-    if (queue_.size() >= options_.queue_limit) {
-      ++statistics_.rx_dropped;
-      return;
+    const Timestamp now = options_.clock->wall();
+    for (const auto& frame : frames) {
+      if (!accepted(frame)) continue;
+      if (queue_.size() >= options_.queue_limit) {
+        ++statistics_.rx_dropped;
+        continue;
+      }
+      queue_.push_back({frame, now});
+      queued = true;
     }
-    queue_.push_back({frame, options_.clock->wall()});
   }
-  arrived_.notify_one();
+  if (queued) arrived_.notify_one();
 }
 
 std::optional<TimedFrame> VirtualBus::receive(std::chrono::milliseconds timeout) {
@@ -117,6 +128,22 @@ std::optional<TimedFrame> VirtualBus::receive(std::chrono::milliseconds timeout)
   queue_.pop_front();
   ++statistics_.frames_in;
   return frame;
+}
+
+std::size_t VirtualBus::receive_batch(std::vector<TimedFrame>& out, std::size_t max,
+                                      std::chrono::milliseconds timeout) {
+  if (max == 0) return 0;
+  std::unique_lock lock(mutex_);
+  ++waiting_;
+  arrived_.wait_for(lock, timeout, [&] { return !queue_.empty() || !open_; });
+  --waiting_;
+  if (!open_) return 0;
+  const std::size_t taken = std::min(max, queue_.size());
+  const auto end = queue_.begin() + static_cast<std::ptrdiff_t>(taken);
+  out.insert(out.end(), queue_.begin(), end);
+  queue_.erase(queue_.begin(), end);
+  statistics_.frames_in += taken;
+  return taken;
 }
 
 std::size_t VirtualBus::waiting_receivers() const {

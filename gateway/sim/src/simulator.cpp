@@ -1,5 +1,6 @@
 #include "teejet/sim/simulator.hpp"
 
+#include <pthread.h>
 #include <spdlog/spdlog.h>
 
 #include <array>
@@ -104,6 +105,7 @@ Status Simulator::start() {
                   bus_->name());
   }
   thread_ = std::jthread([this](const std::stop_token& stop) { run(stop); });
+  pthread_setname_np(thread_.native_handle(), "tj-simulator");
   return {};
 }
 
@@ -187,25 +189,35 @@ void Simulator::on_frame(const can::TimedFrame& received, std::vector<Outgoing>&
   ++frames_handled_;  // after acting on it: a test may move the clock once it sees the count
 }
 
-void Simulator::send(const Outgoing& outgoing) {
-  const auto frame = codec::encode(outgoing.address, outgoing.message, options_.encode_options);
-  if (!frame) {  // a bug: the valves only produce values in the sheet's ranges
-    logger_->error("cannot encode {} from {}: {}", codec::message_name(outgoing.message),
-                   address_text(outgoing.address), frame.error().reason);
-    return;
+void Simulator::send(const std::vector<Outgoing>& outgoing) {
+  frames_.clear();
+  for (const auto& message : outgoing) {
+    auto frame = codec::encode(message.address, message.message, options_.encode_options);
+    if (!frame) {  // a bug: the valves only produce values in the sheet's ranges
+      logger_->error("cannot encode {} from {}: {}", codec::message_name(message.message),
+                     address_text(message.address), frame.error().reason);
+      continue;
+    }
+    frames_.push_back(*frame);
   }
-  const auto sent = bus_->send(*frame);
-  if (!sent) {
-    ++send_failures_;
+  if (frames_.empty()) return;
+  const auto sent = bus_->send_batch(frames_);
+  frames_sent_ += sent.sent;
+  if (!sent.status) {
+    send_failures_ += frames_.size() - sent.sent;
     // Once per outage, not once per frame: a link that is down would flood the log.
-    if (!last_send_failed_) logger_->warn("{}: send failed: {}", bus_->name(), sent.error().reason);
+    if (!last_send_failed_) {
+      logger_->warn("{}: send failed: {}", bus_->name(), sent.status.error().reason);
+    }
     last_send_failed_ = true;
-    return;
+  } else {
+    if (last_send_failed_) logger_->info("{}: sending again", bus_->name());
+    last_send_failed_ = false;
   }
-  if (last_send_failed_) logger_->info("{}: sending again", bus_->name());
-  last_send_failed_ = false;
-  ++frames_sent_;
-  if (options_.verbose) log_frame("tx", options_.clock->wall(), *frame);
+  if (options_.verbose) {
+    const Timestamp now = options_.clock->wall();
+    for (std::size_t i = 0; i < sent.sent; ++i) log_frame("tx", now, frames_[i]);
+  }
 }
 
 void Simulator::log_frame(const char* way, Timestamp at, const codec::CanFrame& frame) const {
@@ -223,7 +235,7 @@ void Simulator::run(const std::stop_token& stop) {
       auto due = bank_.advance(options_.clock->steady());
       for (auto& message : due) out.push_back(std::move(message));
     }
-    for (const auto& outgoing : out) send(outgoing);
+    send(out);
   }
 }
 

@@ -313,6 +313,35 @@ TEST_F(SocketCanBench, FramesCarryKernelTimestampsCloseToTheClockAndInOrder) {
   EXPECT_GT(got.back().received, got.front().received);  // real stamps, not all the same
 }
 
+// A burst already in the kernel's queue leaves in batches (recvmmsg), in order, counted, each
+// with its own stamp; `max` bounds a batch.
+TEST_F(SocketCanBench, ReceiveBatchTakesABurstInOrderUpToMax) {
+  SocketCanBus bus(interface, {.filters = controller_side_filters()});
+  ASSERT_TRUE(bus.open());
+  RawPeer peer(interface);
+  ASSERT_TRUE(peer.ok());
+  constexpr std::size_t kFrames = 100;
+  for (std::size_t i = 0; i < kFrames; ++i) {
+    ASSERT_TRUE(peer.send(eff(0x18EFD5D8), {0x02, static_cast<std::uint8_t>(i)}));
+  }
+  std::vector<TimedFrame> got;
+  std::size_t batches = 0;
+  const auto deadline = SteadyClock::now() + 5s;
+  while (got.size() < kFrames && SteadyClock::now() < deadline) {
+    const std::size_t before = got.size();
+    const std::size_t taken = bus.receive_batch(got, 40, 1s);
+    EXPECT_EQ(got.size(), before + taken);
+    EXPECT_LE(taken, 40u);
+    if (taken > 0) ++batches;
+  }
+  ASSERT_EQ(got.size(), kFrames);
+  for (std::size_t i = 0; i < kFrames; ++i) EXPECT_EQ(got[i].frame.data[1], i) << i;
+  EXPECT_LT(batches, kFrames / 4) << "the burst left one frame at a time";
+  EXPECT_EQ(bus.statistics().frames_in, kFrames);
+  std::vector<TimedFrame> none;
+  EXPECT_EQ(bus.receive_batch(none, 40, 0ms), 0u);
+}
+
 TEST_F(SocketCanBench, OwnFramesAreNotReceivedBackButOtherSocketsSeeThem) {
   SocketCanBus bus(interface);  // no filters: our own 0x18EFD8D5 would pass them
   ASSERT_TRUE(bus.open());

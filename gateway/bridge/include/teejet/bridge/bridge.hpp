@@ -12,6 +12,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -80,7 +81,9 @@ class Bridge {
   Bridge(const Bridge&) = delete;
   Bridge& operator=(const Bridge&) = delete;
 
-  void on_frame(const can::TimedFrame& frame);
+  void on_frame(const can::TimedFrame& frame) { on_frames(std::span(&frame, 1)); }
+  // A burst from the bus, in order, under one lock.
+  void on_frames(std::span<const can::TimedFrame> frames);
 
   // `commander` identifies the writer that sent the command (for the fail-safe); empty if
   // unknown. Commands for serials this gateway has not seen are ignored: another gateway may
@@ -105,6 +108,7 @@ class Bridge {
   std::vector<directory::ValveRecord> valves() const;
 
  private:
+  void handle_frame(const can::TimedFrame& frame);  // mutex_ held
   void handle_i_am_here(std::uint8_t address, const codec::IAmHere& message, Timestamp received,
                         SteadyTime now);
   void handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -80,6 +81,20 @@ class Bus {
   // handled inside (waiting for the link, reopening a vanished interface); they show in
   // statistics(), never as a busy loop. Returns nullopt on timeout or when closed.
   virtual std::optional<TimedFrame> receive(std::chrono::milliseconds timeout) = 0;
+
+  // Waits like receive() for the first frame, then appends to `out` every frame already waiting,
+  // up to `max` in all: one wake-up and one lock for a burst instead of one per frame. Returns
+  // how many were appended (0 on timeout or when closed). The default calls receive().
+  virtual std::size_t receive_batch(std::vector<TimedFrame>& out, std::size_t max,
+                                    std::chrono::milliseconds timeout);
+
+  // Sends `frames` in order as send() would, stopping at the first that fails. The default
+  // calls send(); the virtual bus hands a burst to each receiver at once.
+  struct BatchSent {
+    std::size_t sent = 0;
+    Status status;  // the first failure, if any
+  };
+  virtual BatchSent send_batch(std::span<const codec::CanFrame> frames);
 
   virtual BusStatistics statistics() const = 0;
 };

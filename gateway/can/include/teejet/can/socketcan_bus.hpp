@@ -38,6 +38,8 @@ class SocketCanBus final : public Bus {
   void close() override;
   Status send(const codec::CanFrame& frame) override;
   std::optional<TimedFrame> receive(std::chrono::milliseconds timeout) override;
+  std::size_t receive_batch(std::vector<TimedFrame>& out, std::size_t max,
+                            std::chrono::milliseconds timeout) override;
   BusStatistics statistics() const override;
 
  private:

@@ -34,6 +34,9 @@ class VirtualBus final : public Bus {
   void close() override;
   Status send(const codec::CanFrame& frame) override;
   std::optional<TimedFrame> receive(std::chrono::milliseconds timeout) override;
+  std::size_t receive_batch(std::vector<TimedFrame>& out, std::size_t max,
+                            std::chrono::milliseconds timeout) override;
+  BatchSent send_batch(std::span<const codec::CanFrame> frames) override;
   BusStatistics statistics() const override;
 
   // Delivers a frame to this endpoint only, as if it had come from the bus (filters apply).
@@ -53,7 +56,8 @@ class VirtualBus final : public Bus {
  private:
   struct Medium;
   static std::shared_ptr<Medium> medium_named(const std::string& name);
-  void deliver(const codec::CanFrame& frame);
+  // Queues the frames this endpoint's filters accept, under one lock, with one wake-up.
+  void deliver(std::span<const codec::CanFrame> frames);
 
   const std::string name_;
   const Options options_;

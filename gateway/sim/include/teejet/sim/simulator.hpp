@@ -86,7 +86,8 @@ class Simulator {
   void run(const std::stop_token& stop);
   std::chrono::milliseconds wait_budget() const;
   void on_frame(const can::TimedFrame& received, std::vector<Outgoing>& out);
-  void send(const Outgoing& outgoing);
+  // Encodes and sends a burst as one batch: the receiver wakes once for it.
+  void send(const std::vector<Outgoing>& outgoing);
   void log_frame(const char* way, Timestamp at, const codec::CanFrame& frame) const;
 
   std::unique_ptr<can::Bus> bus_;
@@ -100,7 +101,8 @@ class Simulator {
   std::atomic<std::uint64_t> frames_handled_{0};
   std::atomic<std::uint64_t> frames_sent_{0};
   std::atomic<std::uint64_t> send_failures_{0};
-  bool last_send_failed_ = false;  // simulator thread only
+  bool last_send_failed_ = false;        // simulator thread only
+  std::vector<codec::CanFrame> frames_;  // simulator thread only: the burst being sent
 };
 
 // One line describing a frame as `-v` logs it: candump -L text, then the decoded message,
