@@ -57,9 +57,14 @@ Bridge::~Bridge() = default;
 
 // ---- Frames from the bus ------------------------------------------------------------------
 
+// The lock is taken per frame, not per burst: a command arriving meanwhile waits for one frame's
+// DDS write at most, never for a whole burst (measured in UML with an ECU reading: a burst-long
+// lock made command->frame p50 9.6 ms instead of 0.5 ms). An uncontended lock costs ~20 ns.
 void Bridge::on_frames(std::span<const can::TimedFrame> frames) {
-  std::lock_guard lock(mutex_);
-  for (const auto& frame : frames) handle_frame(frame);
+  for (const auto& frame : frames) {
+    std::lock_guard lock(mutex_);
+    handle_frame(frame);
+  }
 }
 
 void Bridge::handle_frame(const can::TimedFrame& frame) {

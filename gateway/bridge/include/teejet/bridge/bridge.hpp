@@ -82,7 +82,7 @@ class Bridge {
   Bridge& operator=(const Bridge&) = delete;
 
   void on_frame(const can::TimedFrame& frame) { on_frames(std::span(&frame, 1)); }
-  // A burst from the bus, in order, under one lock.
+  // A burst from the bus, in order.
   void on_frames(std::span<const can::TimedFrame> frames);
 
   // `commander` identifies the writer that sent the command (for the fail-safe); empty if
