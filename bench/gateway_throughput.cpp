@@ -8,7 +8,6 @@
 // every frame sent was taken off the bus (none dropped by the bounded receive queue) and
 // attributed to its valve. Creates a DDS participant: run it inside tests/netns/isolated.
 
-#include <pthread.h>
 #include <spdlog/spdlog.h>
 #include <time.h>
 #include <unistd.h>
@@ -116,7 +115,10 @@ std::optional<RateResult> run_rate(const Options& options, double rate, int roun
   }
   // The gateway's poll requests land here and are never read: a small queue, dropped.
   can::VirtualBus flood(bus_name, {.filters = can::valve_side_filters(), .queue_limit = 16});
-  if (!flood.open()) return std::nullopt;
+  if (auto opened = flood.open(); !opened) {
+    std::fprintf(stderr, "gateway_throughput: %s\n", opened.error().reason.c_str());
+    return std::nullopt;
+  }
 
   std::vector<codec::CanFrame> announce;
   for (int valve = 0; valve < kValves; ++valve) {
@@ -129,8 +131,16 @@ std::optional<RateResult> run_rate(const Options& options, double rate, int roun
   while (gateway.bridge().valves().size() < kValves && Clock::now() < announced) {
     std::this_thread::sleep_for(1ms);
   }
+  if (gateway.bridge().valves().size() < kValves) {
+    std::fprintf(stderr, "gateway_throughput: the gateway knows %zu of %d valves after 5 s\n",
+                 gateway.bridge().valves().size(), kValves);
+    return std::nullopt;
+  }
   const auto reader = reader_thread();
-  if (!reader) return std::nullopt;
+  if (!reader) {
+    std::fprintf(stderr, "gateway_throughput: no thread named tj-bus-reader\n");
+    return std::nullopt;
+  }
 
   const auto before = gateway_bus->statistics();
   const auto counters_before = gateway.bridge().counters();

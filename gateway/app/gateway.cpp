@@ -12,7 +12,7 @@ using namespace std::chrono_literals;
 constexpr Duration kDecodeReportPeriod = 10s;
 // Longest wait of either thread: the bridge has a deadline at least once a second anyway.
 constexpr Duration kLongestWait = 1s;
-// Frames handed to the bridge at once at most: bounds the time the bridge's lock is held.
+// Frames taken off the bus per wake-up at most; the deadlines are looked at between batches.
 constexpr std::size_t kReceiveBatch = 64;
 
 }  // namespace
@@ -96,7 +96,7 @@ Duration Gateway::until_next_deadline() const {
   return std::clamp(bridge_->next_deadline() - clock_->steady(), Duration{0}, kLongestWait);
 }
 
-// Frames are taken in bursts: one wake-up, one lock and one look at the deadlines per burst.
+// Frames are taken in bursts: one wake-up and one look at the deadlines per burst.
 void Gateway::read_bus(std::stop_token stop) {
   std::vector<can::TimedFrame> frames;
   frames.reserve(kReceiveBatch);

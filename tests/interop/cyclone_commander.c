@@ -39,7 +39,12 @@ int main(int argc, char** argv) {
 
   dds_publication_matched_status_t matched;
   int known = 0;
+  const dds_time_t give_up = dds_time() + DDS_SECS(30);
   do {
+    if (dds_time() > give_up) {
+      fputs("cyclone_commander: no gateway matched the command writer within 30 s\n", stderr);
+      return 2;
+    }
     dds_sleepfor(DDS_MSECS(10));
     dds_get_publication_matched_status(writer, &matched);
     void* samples[1] = {NULL};

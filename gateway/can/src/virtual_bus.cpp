@@ -118,12 +118,17 @@ void VirtualBus::deliver(std::span<const codec::CanFrame> frames) {
   if (queued) arrived_.notify_one();
 }
 
-std::optional<TimedFrame> VirtualBus::receive(std::chrono::milliseconds timeout) {
-  std::unique_lock lock(mutex_);
+bool VirtualBus::wait_for_frames(std::unique_lock<std::mutex>& lock,
+                                 std::chrono::milliseconds timeout) {
   ++waiting_;
   arrived_.wait_for(lock, timeout, [&] { return !queue_.empty() || !open_; });
   --waiting_;
-  if (queue_.empty() || !open_) return std::nullopt;
+  return open_ && !queue_.empty();
+}
+
+std::optional<TimedFrame> VirtualBus::receive(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  if (!wait_for_frames(lock, timeout)) return std::nullopt;
   TimedFrame frame = queue_.front();
   queue_.pop_front();
   ++statistics_.frames_in;
@@ -134,10 +139,7 @@ std::size_t VirtualBus::receive_batch(std::vector<TimedFrame>& out, std::size_t 
                                       std::chrono::milliseconds timeout) {
   if (max == 0) return 0;
   std::unique_lock lock(mutex_);
-  ++waiting_;
-  arrived_.wait_for(lock, timeout, [&] { return !queue_.empty() || !open_; });
-  --waiting_;
-  if (!open_) return 0;
+  if (!wait_for_frames(lock, timeout)) return 0;
   const std::size_t taken = std::min(max, queue_.size());
   const auto end = queue_.begin() + static_cast<std::ptrdiff_t>(taken);
   out.insert(out.end(), queue_.begin(), end);

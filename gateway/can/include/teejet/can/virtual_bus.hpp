@@ -58,6 +58,9 @@ class VirtualBus final : public Bus {
   static std::shared_ptr<Medium> medium_named(const std::string& name);
   // Queues the frames this endpoint's filters accept, under one lock, with one wake-up.
   void deliver(std::span<const codec::CanFrame> frames);
+  // Waits (counted in waiting_receivers()) until a frame is queued, the bus closes or `timeout`
+  // passes; true when a frame is there to take. `lock` holds mutex_.
+  bool wait_for_frames(std::unique_lock<std::mutex>& lock, std::chrono::milliseconds timeout);
 
   const std::string name_;
   const Options options_;
