@@ -84,7 +84,7 @@ bridge::ValveLimits read_limits(const Reader& reader, const YAML::Node& node,
 void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& config) {
   reader.expect_keys(g, "gateway",
                      {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
-                      "on_commander_lost", "allow_baud_change"});
+                      "on_commander_lost", "allow_baud_change", "receive_coalesce_us"});
   if (g["name"]) config.bridge.gateway_name = reader.scalar(g["name"], "gateway.name");
   if (g["can"]) config.can = reader.scalar(g["can"], "gateway.can");
   if (g["domain"]) {
@@ -109,6 +109,10 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
   if (g["allow_baud_change"]) {
     config.bridge.allow_baud_change =
         reader.flag(g["allow_baud_change"], "gateway.allow_baud_change");
+  }
+  if (g["receive_coalesce_us"]) {
+    config.receive_coalesce = std::chrono::microseconds(
+        reader.integer(g["receive_coalesce_us"], "gateway.receive_coalesce_us", 0, 10'000));
   }
 }
 

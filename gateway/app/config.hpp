@@ -23,6 +23,10 @@ struct GatewayConfig {
   std::string profile_file;
   bool stop_valves_on_exit = true;
   OnCommanderLost on_commander_lost = OnCommanderLost::kStopItsValves;
+  // While frames arrive closer together than this, the bus reader waits this long after a
+  // batch before taking the next one (interrupt moderation): one wake-up carries several
+  // frames. 0: every frame wakes the reader. docs/performance.md has the trade.
+  Duration receive_coalesce = std::chrono::microseconds(0);
   // For --can sim:N: the embedded simulator's N valves, serials from sim_first_serial up.
   std::uint32_t sim_first_serial = 1;
   double sim_degrees_per_second = 90.0;

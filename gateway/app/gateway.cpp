@@ -96,20 +96,42 @@ Duration Gateway::until_next_deadline() const {
   return std::clamp(bridge_->next_deadline() - clock_->steady(), Duration{0}, kLongestWait);
 }
 
-// Frames are taken in bursts: one wake-up and one look at the deadlines per burst.
+// Frames are taken in bursts: one wake-up and one look at the deadlines per burst. On a busy
+// bus (frames closer together than the coalescing window) the reader lets the next burst
+// gather for the window instead of waking for every frame: at a full 500 kbit/s bus a wake-up
+// costs this 2-vCPU machine more than decoding and publishing the frame it brings.
 void Gateway::read_bus(std::stop_token stop) {
   std::vector<can::TimedFrame> frames;
   frames.reserve(kReceiveBatch);
+  const Duration window = config_.receive_coalesce;
+  bool busy = false;
+  SteadyTime last_batch{};
   while (!stop.stop_requested()) {
-    const Duration left = until_next_deadline();
+    Duration left = until_next_deadline();
     if (left <= Duration{0}) {
       bridge_->tick();
       log_changes();  // at least once a second, never per frame
       continue;
     }
+    if (busy) {
+      std::this_thread::sleep_for(std::min(window, left));
+      left = until_next_deadline();
+    }
     frames.clear();
-    const auto wait = std::chrono::ceil<std::chrono::milliseconds>(left);
-    if (backend_.bus->receive_batch(frames, kReceiveBatch, wait) > 0) bridge_->on_frames(frames);
+    // After a coalescing wait, take what gathered without blocking: nothing means quiet again.
+    const auto wait =
+        busy ? std::chrono::milliseconds(0) : std::chrono::ceil<std::chrono::milliseconds>(left);
+    const std::size_t taken = backend_.bus->receive_batch(frames, kReceiveBatch, wait);
+    if (taken == 0) {
+      busy = false;
+      continue;
+    }
+    // Busy while each window brings frames or they come closer together than the window. A
+    // full batch means more are waiting: take them at once.
+    const SteadyTime now = clock_->steady();
+    busy = taken < kReceiveBatch && (busy || now - last_batch < window);
+    last_batch = now;
+    bridge_->on_frames(frames);
   }
 }
 

@@ -585,5 +585,25 @@ TEST_F(BridgeTest, NextDeadlineIsTheEarliestOfStatusExpiryAndCommands) {
   EXPECT_EQ(bridge.next_deadline(), start + 2s);
 }
 
+TEST_F(BridgeTest, AValveThatGoesQuietIsNeverDeclaredOfflineLate) {
+  // The deadline is kept between batches of frames; an I'm Here must not leave it too late.
+  auto settings = config();
+  settings.offline_after = 500ms;
+  Bridge bridge(settings, gateway_bus, sink, clock);
+  const SteadyTime start = clock->steady();
+  announce(bridge, 0xD8, 1, kStart);
+  announce(bridge, 0xD9, 2, kStart + 100ms);
+  EXPECT_EQ(bridge.next_deadline(), start + 500ms + 1ns);
+  announce(bridge, 0xD8, 1, kStart + 300ms);  // 1 is now due at 800 ms, 2 at 600 ms
+  EXPECT_LE(bridge.next_deadline(), start + 600ms + 1ns);
+  tick_at(bridge, kStart + 500ms + 1ns);  // nothing due yet: a fresh look
+  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_EQ(bridge.next_deadline(), start + 600ms + 1ns);
+  tick_at(bridge, kStart + 600ms + 1ns);
+  EXPECT_EQ(sink.presences.back().serial(), 2u);
+  EXPECT_FALSE(sink.presences.back().online());
+  EXPECT_EQ(bridge.next_deadline(), start + 800ms + 1ns);
+}
+
 }  // namespace
 }  // namespace teejet::bridge

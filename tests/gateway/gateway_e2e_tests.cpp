@@ -317,6 +317,47 @@ TEST_F(GatewayE2E, ValvesGoOfflineWhenTheirIAmHereStops) {
   EXPECT_EQ(rejected[0].reason().to_string(), "valve TJV000001 is offline");
 }
 
+TEST_F(GatewayE2E, ACoalescingReaderStillDeliversEveryFrameOfABusyBus) {
+  // gateway.receive_coalesce_us at its maximum: a frame every 250 us (a full 500 kbit/s bus)
+  // gathers in batches, and none is lost or left unpublished.
+  const std::string bus_name = "coalesce-" + std::to_string(::getpid());
+  GatewayConfig config;
+  config.can = "virtual:" + bus_name;
+  config.domain = test_domain();
+  config.bridge.gateway_name = "gw-coalesce";
+  config.receive_coalesce = 10ms;
+  auto backend = make_bus_backend(config);
+  ASSERT_TRUE(backend) << backend.error().reason;
+  const can::Bus& gateway_bus = *backend->bus;
+  Gateway gateway(config, std::move(*backend));
+  ASSERT_TRUE(gateway.start());
+  can::VirtualBus valve(bus_name, {.filters = can::valve_side_filters(), .queue_limit = 64});
+  ASSERT_TRUE(valve.open());
+  Ecu ecu(test_domain(), "test-ecu");
+  auto* position = ecu.reader<ValvePosition>();
+
+  ASSERT_TRUE(valve.send(*codec::encode(0xD8, codec::IAmHere{0x000123, 900001, false})));
+  ASSERT_TRUE(eventually([&] { return gateway.bridge().valves().size() == 1; }, 5s));
+  constexpr int kFrames = 2000;
+  auto next = std::chrono::steady_clock::now();
+  for (int i = 1; i <= kFrames; ++i) {
+    ASSERT_TRUE(valve.send(*codec::encode(0xD8, codec::Position{(i % 900) / 10.0})));
+    next += 250us;
+    std::this_thread::sleep_until(next);
+  }
+  std::map<std::uint32_t, ValvePosition> seen;
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest_by_serial(position, seen);
+        return gateway_bus.statistics().frames_in == 1 + kFrames && seen.count(900001) &&
+               seen[900001].degrees() == static_cast<float>((kFrames % 900) / 10.0);
+      },
+      10s))
+      << gateway_bus.statistics().frames_in << " frames taken";
+  EXPECT_EQ(gateway_bus.statistics().rx_dropped, 0u);
+  EXPECT_EQ(gateway.bridge().counters().unattributed, 0u);
+}
+
 TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
   auto left_owner = make_gateway(sim_config("gw-left", 2, 1));
   Gateway& left = *left_owner;

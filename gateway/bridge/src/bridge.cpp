@@ -111,6 +111,7 @@ void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& messag
     }
   }
   displaced_by_.erase(message.serial);
+  if (next_deadline_) next_deadline_ = std::min(*next_deadline_, now + config_.offline_after);
   const auto valve = *directory_.find(message.serial);
   if (rearm) arm_polling(valve);
   publish_presence(valve);
@@ -192,6 +193,7 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   }
   Outcome outcome;
   tracker_->sent(command.serial(), *message, command, commander, clock_->steady(), outcome);
+  next_deadline_.reset();
   settle(outcome);
 }
 
@@ -252,10 +254,16 @@ void Bridge::tick() {
     publish_gateway_status();
     next_status_ = now + kStatusPeriod;
   }
+  next_deadline_.reset();
 }
 
 SteadyTime Bridge::next_deadline() const {
   std::lock_guard lock(mutex_);
+  if (!next_deadline_) next_deadline_ = earliest_deadline();
+  return *next_deadline_;
+}
+
+SteadyTime Bridge::earliest_deadline() const {
   SteadyTime next = next_status_;
   if (const auto expiry = directory_.next_expiry()) {
     // Expiry is "older than the timeout": the first instant it is due is one tick later.
