@@ -12,7 +12,9 @@
 #   --samples    measured samples per latency series, after 100 warm-up samples (default: 1000)
 #   --window-s   CPU/memory window, after 8 s of settling (default: 30)
 #   --raw-dir    keep every run's output and every latency (ns) there
-#   --host       also measure on the host, inside tests/netns/isolated: the DDS baseline and
+#   --host       also measure on the host, inside tests/netns/isolated: the DDS baseline,
+#                latency under load beside bare Fast DDS under the same load (a gateway in the
+#                bench process, 31 simulated valves at full poll, gateway_latency --load-valves), and
 #                teejet-gateway --can sim:32 (the embedded simulator's cost included), on the
 #                default poll schedule and with every telemetry message at 0.1 s
 #                (bench/full-poll.yaml)
@@ -124,6 +126,14 @@ measure_on_host() {
   # with --profile, and a second load of the same file only logs errors.
   unset FASTDDS_DEFAULT_PROFILES_FILE
   "$bench" baseline --label host --domain 87 --profile "$profile" "${series[@]}" || return 1
+  # Latency under load, gateway and bare Fast DDS side by side: an in-process gateway with 31
+  # simulated valves on a virtual bus, every telemetry message at 0.1 s (~2,600 frames/s), an
+  # ECU in the bench reading every position; the bench valve beside them.
+  local load=(--load-valves 31 --load-config "$here/full-poll.yaml")
+  "$bench" baseline --label host-full "${load[@]}" --domain 85 --profile "$profile" \
+    "${series[@]}" || return 1
+  "$bench" gateway --label host-full "${load[@]}" --domain 86 --profile "$profile" \
+    "${series[@]}" || return 1
   start_gateway 88 sim:32
   "$bench" resources --label host-sim32 --pid "$gateway_pid" --settle-s "$settle_s" \
     --window-s "$window_s" || return 1

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "dds_support.hpp"
+#include "in_process_gateway.hpp"
 #include "listeners.hpp"
 #include "modes.hpp"
 #include "series.hpp"
@@ -67,6 +68,7 @@ std::optional<std::pair<pid_t, int>> spawn_receiver(const Options& options,
                                         "--topic",         topic,
                                         "--domain",        std::to_string(options.domain),
                                         "--count",         std::to_string(total),
+                                        "--serial",        std::to_string(options.serial),
                                         "--timeout-s",     std::to_string(timeout_s)};
   if (!options.profile.empty()) {
     arguments.push_back("--profile");
@@ -189,12 +191,30 @@ int receive_topic(const Options& options, const fdds::DataReaderQos& qos,
 }  // namespace
 
 int run_baseline(const Options& options) {
+  // The same load as `gateway --load-valves`: a busy gateway in this process, and every
+  // position it publishes read here, as the ECU of gateway mode reads them.
+  std::unique_ptr<InProcessGateway> load;
+  if (options.load_valves > 0) {
+    switch_off_intraprocess_delivery();
+    auto started = InProcessGateway::start({.valves = options.load_valves,
+                                            .config_file = options.load_config,
+                                            .domain = options.domain,
+                                            .profile = options.profile});
+    if (!started) return fail(started.error());
+    load = std::move(*started);
+  }
+  OnSample<ValvePosition> load_positions([](const ValvePosition&) {});
   // One participant for both series: the profile file is loaded once per process (a second
   // load is refused with errors about duplicate transport ids).
   auto participant = dds::Participant::create({.domain = options.domain,
                                                .profile_file = options.profile,
                                                .name = "gateway-latency-baseline-writer"});
   if (!participant) return fail(participant.error());
+  if (load) {
+    auto reader =
+        open_reader<ValvePosition>(**participant, topics::state_reader_qos(), &load_positions);
+    if (!reader) return fail(reader.error());
+  }
   const int position = run_baseline_topic<ValvePosition>(options, **participant, "position",
                                                          topics::state_writer_qos(),
                                                          &baseline_position, "baseline_position");
@@ -204,16 +224,22 @@ int run_baseline(const Options& options) {
   return position != 0 ? position : command;
 }
 
+// Samples of other serials (a gateway under load on the same domain) are not ours.
 int run_receive(const Options& options) {
   if (options.topic == "position") {
     return receive_topic<ValvePosition>(
-        options, topics::state_reader_qos(), [](const ValvePosition& sample) {
-          return std::optional<std::int64_t>(std::lround(sample.degrees()));
+        options, topics::state_reader_qos(),
+        [&](const ValvePosition& sample) -> std::optional<std::int64_t> {
+          if (sample.serial() != options.serial) return std::nullopt;
+          return std::lround(sample.degrees());
         });
   }
   return receive_topic<ValveCommand>(
       options, topics::command_reader_qos(),
-      [](const ValveCommand& sample) { return std::optional<std::int64_t>(sample.command_id()); });
+      [&](const ValveCommand& sample) -> std::optional<std::int64_t> {
+        if (sample.serial() != options.serial) return std::nullopt;
+        return sample.command_id();
+      });
 }
 
 }  // namespace teejet::bench

@@ -1,5 +1,7 @@
 // gateway mode: command -> frame and frame -> sample through a running teejet-gateway. This
-// process plays the valve (a CAN socket) and the ECU (a DDS participant).
+// process plays the valve (a CAN socket) and the ECU (a DDS participant). With --load-valves
+// the gateway runs in this process on a virtual bus with simulated valves beside the bench
+// valve (in_process_gateway.hpp), for the host.
 
 #include <atomic>
 #include <chrono>
@@ -14,6 +16,7 @@
 #include <utility>
 
 #include "dds_support.hpp"
+#include "in_process_gateway.hpp"
 #include "listeners.hpp"
 #include "modes.hpp"
 #include "series.hpp"
@@ -115,7 +118,23 @@ int run_gateway(const Options& options) {
   }
   // Only frames for the bench valve: the gateway's frames to other (simulated) valves stay in
   // the kernel.
-  can::SocketCanBus bus(options.can, {.filters = {{codec::to_valve_id(address), 0x1FFFFFFF}}});
+  const std::vector<can::Filter> bench_valve{{codec::to_valve_id(address), 0x1FFFFFFF}};
+  std::unique_ptr<InProcessGateway> in_process;
+  std::unique_ptr<can::Bus> bus_owner;
+  if (options.load_valves > 0) {
+    switch_off_intraprocess_delivery();
+    auto started = InProcessGateway::start({.valves = options.load_valves,
+                                            .config_file = options.load_config,
+                                            .domain = options.domain,
+                                            .profile = options.profile});
+    if (!started) return fail(started.error());
+    in_process = std::move(*started);
+    bus_owner = in_process->valve_endpoint(bench_valve);
+  } else {
+    bus_owner = std::make_unique<can::SocketCanBus>(options.can,
+                                                    can::SocketCanOptions{.filters = bench_valve});
+  }
+  can::Bus& bus = *bus_owner;
   if (auto opened = bus.open(); !opened) return fail(opened.error());
   const Announcer announcer(bus, address, options.serial);
 

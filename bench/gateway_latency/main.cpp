@@ -45,6 +45,14 @@ int main(int argc, char** argv) {
     mode->add_option("--pace-max-ms", options.pace_max_ms, "longest gap between samples");
     mode->add_option("--raw-dir", options.raw_dir, "write every latency (ns) to files here");
     mode->add_option("--serial", options.serial, "serial of the bench valve");
+    mode->add_option("--load-valves", options.load_valves,
+                     "run a gateway in this process with this many simulated valves on a "
+                     "virtual bus (the host, without CAN): the load, and for `gateway` the "
+                     "gateway measured")
+        ->check(CLI::Range(1, 31));
+    mode->add_option("--load-config", options.load_config,
+                     "that gateway's YAML configuration (e.g. bench/full-poll.yaml)")
+        ->check(CLI::ExistingFile);
   };
 
   auto* gateway = app.add_subcommand(
@@ -67,6 +75,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"position", "command"}));
   receive->add_option("--count", options.count)->required();
   receive->add_option("--timeout-s", options.timeout_s);
+  receive->add_option("--serial", options.serial, "take samples of this serial only");
 
   auto* resources = app.add_subcommand(
       "resources", "CPU and memory of processes over a window, and the bus frame rate");
@@ -78,6 +87,14 @@ int main(int argc, char** argv) {
   resources->add_option("--interface", options.interface, "count the frames on this interface");
   resources->add_flag("--subscribe", options.subscribe,
                       "read every gateway topic meanwhile, as an ECU would");
+  resources
+      ->add_option("--commands-per-second", options.commands_per_second,
+                   "with --subscribe: move valves TJV000001..32 in turn at this rate")
+      ->check(CLI::Range(0.0, 1000.0));
+  resources
+      ->add_option("--rss-every-s", options.rss_every_s,
+                   "sample VmRSS this often in the window; reports first, lowest, highest")
+      ->check(CLI::Range(0.0, 3600.0));
 
   CLI11_PARSE(app, argc, argv);
   // The CAN layer logs opening and closing at info; the output here is the results only.

@@ -30,6 +30,10 @@ struct Options {
   std::string can = "vcan0";
   std::uint32_t serial = 900001;
   int address = codec::kLastValveAddress;
+  // Under load on the host (gateway and baseline modes): an in-process gateway with this many
+  // simulated valves beside the bench valve, on this poll schedule (in_process_gateway.hpp).
+  int load_valves = 0;
+  std::string load_config;
   // Baseline child (receive mode)
   std::string topic;
   int count = 0;
@@ -40,6 +44,8 @@ struct Options {
   double settle_s = 5.0;
   std::string interface;
   bool subscribe = false;
+  double commands_per_second = 0;  // Target Degrees to valves 1..32 in turn, during the window
+  double rss_every_s = 0;          // sample VmRSS this often during the window (the soak)
 };
 
 // Reports what was refused on stderr; returns the exit status for the mode to return.

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -57,6 +58,40 @@ class EcuReadingEverything {
     return gateway_counters_;
   }
 
+  // Commands as a commanding ECU writes them, with the statuses they got.
+  Status open_commands() {
+    auto writer = open_writer<ValveCommand>(*participant_, topics::command_writer_qos());
+    if (!writer) return writer.error();
+    command_writer_ = *writer;
+    auto reader =
+        open_reader<CommandStatus>(*participant_, topics::status_reader_qos(), &statuses_);
+    if (!reader) return reader.error();
+    status_reader_ = *reader;
+    return {};
+  }
+  bool commands_matched() const {
+    return command_writer_ && status_reader_ && matched(command_writer_) && matched(status_reader_);
+  }
+  void move(std::uint32_t serial, float degrees) {
+    ValveCommand command;
+    command.serial(serial);
+    command.command_id(++commands_sent_);
+    command.origin(kOrigin);
+    command.kind(COMMAND_TARGET_DEGREES);
+    command.degrees(degrees);
+    command.speed_percent(100);
+    command_writer_->write(&command);
+  }
+  struct CommandCounts {
+    std::uint32_t sent = 0, accepted = 0, completed = 0, superseded = 0, other_final = 0;
+  };
+  CommandCounts command_counts() const {
+    std::lock_guard lock(mutex_);
+    CommandCounts counts = status_counts_;
+    counts.sent = commands_sent_;
+    return counts;
+  }
+
  private:
   explicit EcuReadingEverything(std::unique_ptr<dds::Participant> participant)
       : participant_(std::move(participant)) {}
@@ -97,8 +132,31 @@ class EcuReadingEverything {
     return {};
   }
 
+  static constexpr const char* kOrigin = "gateway-latency-soak";
   std::atomic<std::uint64_t> samples_{0};
   mutable std::mutex mutex_;
+  fdds::DataWriter* command_writer_ = nullptr;
+  fdds::DataReader* status_reader_ = nullptr;
+  std::uint32_t commands_sent_ = 0;  // the commanding thread only
+  CommandCounts status_counts_;
+  OnSample<CommandStatus> statuses_{[this](const CommandStatus& status) {
+    if (status.origin().to_string() != kOrigin) return;
+    std::lock_guard lock(mutex_);
+    switch (status.state()) {
+      case COMMAND_ACCEPTED:
+        ++status_counts_.accepted;
+        break;
+      case COMMAND_COMPLETED:
+        ++status_counts_.completed;
+        break;
+      case COMMAND_SUPERSEDED:
+        ++status_counts_.superseded;
+        break;
+      default:
+        ++status_counts_.other_final;
+        break;
+    }
+  }};
   std::optional<GatewayCounters> gateway_counters_;
   std::set<std::uint32_t> serials_seen_;
   OnSample<ValvePresence> presence_{[this](const ValvePresence& sample) {
@@ -122,6 +180,17 @@ int run_resources(const Options& options) {
     auto created = EcuReadingEverything::create(options);
     if (!created) return fail(created.error());
     ecu = std::move(*created);
+    if (options.commands_per_second > 0) {
+      if (Status opened = ecu->open_commands(); !opened) return fail(opened.error());
+      if (!wait_until([&] { return ecu->commands_matched(); }, kDiscoveryTimeout)) {
+        std::fprintf(stderr, "gateway_latency: no gateway took commands on domain %d\n",
+                     options.domain);
+        return kExitFailure;
+      }
+    }
+  } else if (options.commands_per_second > 0) {
+    std::fprintf(stderr, "gateway_latency: --commands-per-second needs --subscribe\n");
+    return 2;
   }
   // Discovery, the late-joiner burst and the gateway's start-up are not part of the window.
   const auto settled = std::chrono::steady_clock::now() +
@@ -155,8 +224,38 @@ int run_resources(const Options& options) {
   const auto gateway_before = ecu ? ecu->gateway_counters() : std::nullopt;
   const auto window_start = std::chrono::steady_clock::now();
 
-  // The window is a measurement period, not a wait for anything.
-  std::this_thread::sleep_for(std::chrono::duration<double>(options.window_s));
+  // The window is a measurement period, not a wait for anything; meanwhile commands go out at
+  // their rate and RSS is sampled at its period.
+  const auto window_end = window_start + std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                             std::chrono::duration<double>(options.window_s));
+  const auto period = [](double seconds) {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double>(seconds));
+  };
+  auto next_command = window_start;
+  auto next_rss = window_start;
+  std::vector<std::vector<std::uint64_t>> rss(options.pids.size());
+  std::uint32_t moves = 0;
+  for (;;) {
+    const auto now = std::chrono::steady_clock::now();
+    if (options.rss_every_s > 0 && now >= next_rss) {
+      for (std::size_t i = 0; i < options.pids.size(); ++i) {
+        rss[i].push_back(status_kib(options.pids[i], "VmRSS"));
+      }
+      next_rss += period(options.rss_every_s);
+    }
+    if (options.commands_per_second > 0 && now >= next_command) {
+      // Valves 1..32 in turn, each to the other end of a 10-80 degree stroke every other time.
+      ecu->move(1 + moves % 32, (moves / 32) % 2 ? 10.0F : 80.0F);
+      ++moves;
+      next_command += period(1.0 / options.commands_per_second);
+    }
+    if (now >= window_end) break;
+    auto wake = window_end;
+    if (options.rss_every_s > 0) wake = std::min(wake, next_rss);
+    if (options.commands_per_second > 0) wake = std::min(wake, next_command);
+    std::this_thread::sleep_until(wake);
+  }
 
   const double window =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - window_start).count();
@@ -175,6 +274,25 @@ int run_resources(const Options& options) {
         100.0 * cpu_seconds / window,
         static_cast<unsigned long long>(status_kib(start.pid, "VmRSS")),
         static_cast<unsigned long long>(status_kib(start.pid, "VmHWM")));
+  }
+  for (std::size_t i = 0; i < rss.size() && options.rss_every_s > 0; ++i) {
+    if (rss[i].empty()) continue;
+    const auto [lowest, highest] = std::minmax_element(rss[i].begin(), rss[i].end());
+    std::printf(
+        "RSS label=%s process=%s samples=%zu every_s=%.1f first_kib=%llu lowest_kib=%llu "
+        "highest_kib=%llu last_kib=%llu spread_kib=%llu\n",
+        options.label.c_str(), process_name(options.pids[i]).c_str(), rss[i].size(),
+        options.rss_every_s, static_cast<unsigned long long>(rss[i].front()),
+        static_cast<unsigned long long>(*lowest), static_cast<unsigned long long>(*highest),
+        static_cast<unsigned long long>(rss[i].back()),
+        static_cast<unsigned long long>(*highest - *lowest));
+  }
+  if (ecu && options.commands_per_second > 0) {
+    // The last commands had no time to finish: their statuses may still be on their way.
+    const auto counts = ecu->command_counts();
+    std::printf("COMMANDS label=%s sent=%u accepted=%u completed=%u superseded=%u other_final=%u\n",
+                options.label.c_str(), counts.sent, counts.accepted, counts.completed,
+                counts.superseded, counts.other_final);
   }
   if (frames_before) {
     const auto frames_after = bus_frames(options.interface);
