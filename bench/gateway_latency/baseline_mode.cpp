@@ -193,16 +193,9 @@ int receive_topic(const Options& options, const fdds::DataReaderQos& qos,
 int run_baseline(const Options& options) {
   // The same load as `gateway --load-valves`: a busy gateway in this process, and every
   // position it publishes read here, as the ECU of gateway mode reads them.
-  std::unique_ptr<InProcessGateway> load;
-  if (options.load_valves > 0) {
-    switch_off_intraprocess_delivery();
-    auto started = InProcessGateway::start({.valves = options.load_valves,
-                                            .config_file = options.load_config,
-                                            .domain = options.domain,
-                                            .profile = options.profile});
-    if (!started) return fail(started.error());
-    load = std::move(*started);
-  }
+  auto started = InProcessGateway::start_if_asked(options);
+  if (!started) return fail(started.error());
+  const std::unique_ptr<InProcessGateway> load = std::move(*started);
   OnSample<ValvePosition> load_positions([](const ValvePosition&) {});
   // One participant for both series: the profile file is loaded once per process (a second
   // load is refused with errors about duplicate transport ids).

@@ -119,21 +119,13 @@ int run_gateway(const Options& options) {
   // Only frames for the bench valve: the gateway's frames to other (simulated) valves stay in
   // the kernel.
   const std::vector<can::Filter> bench_valve{{codec::to_valve_id(address), 0x1FFFFFFF}};
-  std::unique_ptr<InProcessGateway> in_process;
-  std::unique_ptr<can::Bus> bus_owner;
-  if (options.load_valves > 0) {
-    switch_off_intraprocess_delivery();
-    auto started = InProcessGateway::start({.valves = options.load_valves,
-                                            .config_file = options.load_config,
-                                            .domain = options.domain,
-                                            .profile = options.profile});
-    if (!started) return fail(started.error());
-    in_process = std::move(*started);
-    bus_owner = in_process->valve_endpoint(bench_valve);
-  } else {
-    bus_owner = std::make_unique<can::SocketCanBus>(options.can,
-                                                    can::SocketCanOptions{.filters = bench_valve});
-  }
+  auto started = InProcessGateway::start_if_asked(options);
+  if (!started) return fail(started.error());
+  const std::unique_ptr<InProcessGateway> in_process = std::move(*started);
+  const std::unique_ptr<can::Bus> bus_owner =
+      in_process ? in_process->endpoint(bench_valve)
+                 : std::make_unique<can::SocketCanBus>(
+                       options.can, can::SocketCanOptions{.filters = bench_valve});
   can::Bus& bus = *bus_owner;
   if (auto opened = bus.open(); !opened) return fail(opened.error());
   const Announcer announcer(bus, address, options.serial);

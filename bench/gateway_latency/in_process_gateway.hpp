@@ -10,28 +10,22 @@
 #include <string>
 
 #include "gateway.hpp"
+#include "options.hpp"
 #include "teejet/can/bus.hpp"
 
 namespace teejet::bench {
 
-struct InProcessLoad {
-  int valves = 31;          // simulated, from address 0xD8 up; the bench valve takes 0xF7
-  std::string config_file;  // the gateway's YAML (its poll schedule), e.g. bench/full-poll.yaml
-  int domain = 0;
-  std::string profile;
-};
-
-// Call before the first participant of the process: afterwards Fast DDS has read the setting.
-void switch_off_intraprocess_delivery();
-
 class InProcessGateway {
  public:
-  // Starts the simulator, the gateway and its DDS participant; fails saying why.
-  static Result<std::unique_ptr<InProcessGateway>> start(const InProcessLoad& load);
+  // With --load-valves: switches intraprocess delivery off (so call it before this process has
+  // any other participant), then starts options.load_valves simulated valves (addresses from
+  // 0xD8 up; the bench valve takes 0xF7) and a gateway on options.load_config's schedule, on
+  // options.domain. Without: nullptr. Fails saying why.
+  static Result<std::unique_ptr<InProcessGateway>> start_if_asked(const Options& options);
   ~InProcessGateway();
 
-  // A new endpoint on the gateway's bus, as a valve would be: only frames to `filters` arrive.
-  std::unique_ptr<can::Bus> valve_endpoint(std::vector<can::Filter> filters) const;
+  // A new endpoint on the gateway's bus: only frames matching `filters` arrive.
+  std::unique_ptr<can::Bus> endpoint(std::vector<can::Filter> filters) const;
 
  private:
   InProcessGateway() = default;
