@@ -144,6 +144,10 @@ measure_on_host() {
   start_gateway 89 sim:32 -c "$here/full-poll.yaml"
   "$bench" resources --label host-sim32-full --pid "$gateway_pid" --settle-s "$settle_s" \
     --window-s "$window_s" || return 1
+  # The same with every core kept out of idle (bench/warm-cores): the gateway's own cost without
+  # the virtual machine's wake-up-from-idle cost (docs/performance.md).
+  "$here/warm-cores" "$bench" resources --label host-sim32-full-warm --pid "$gateway_pid" \
+    --settle-s 2 --window-s "$window_s" || return 1
   stop_started
 }
 

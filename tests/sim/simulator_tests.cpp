@@ -377,6 +377,26 @@ TEST(SimReceiveTimeout, WaitsUntilTheNextEventRoundedUpAndAtMostMaxWait) {
   EXPECT_EQ(receive_timeout(kT0 + std::chrono::hours(24 * 365), kT0, max_wait), max_wait);
 }
 
+TEST(SimReceiveTimeout, PeriodicMessagesWaitForTheNextTimerTick) {
+  using std::chrono::milliseconds;
+  using std::chrono::nanoseconds;
+  const milliseconds max_wait(50), tick(10);
+  const SteadyTime on_tick(std::chrono::seconds(1000));  // a multiple of the tick
+  EXPECT_EQ(receive_timeout(on_tick + milliseconds(3), on_tick, max_wait, tick), milliseconds(10));
+  EXPECT_EQ(receive_timeout(on_tick + milliseconds(10), on_tick, max_wait, tick),
+            milliseconds(10));  // due on a tick: that tick
+  EXPECT_EQ(receive_timeout(on_tick + milliseconds(10) + nanoseconds(1), on_tick, max_wait, tick),
+            milliseconds(20));
+  EXPECT_EQ(receive_timeout(on_tick + milliseconds(8), on_tick + milliseconds(7), max_wait, tick),
+            milliseconds(3));  // woken by a frame between ticks: back on the grid
+  EXPECT_EQ(receive_timeout(on_tick - milliseconds(1), on_tick, max_wait, tick), milliseconds(0));
+  EXPECT_EQ(receive_timeout(on_tick + milliseconds(41), on_tick, max_wait, tick), max_wait);
+  // Before the clock's epoch (a test clock may start there) the grid is the same.
+  const SteadyTime before_epoch(-std::chrono::seconds(5));
+  EXPECT_EQ(receive_timeout(before_epoch + milliseconds(3), before_epoch, max_wait, tick),
+            milliseconds(10));
+}
+
 // With the real clocks, nobody moves time and nobody sends: the thread wakes for each resend on
 // its own. Counts and values only; how punctually is the benchmarks' business.
 TEST(SimRuntimeRealTime, ResendsComeOnTheirOwnWithTheSystemClock) {

@@ -156,9 +156,17 @@ std::vector<Assignment> Simulator::assignments() const {
 }
 
 std::chrono::milliseconds receive_timeout(std::optional<SteadyTime> next_due, SteadyTime now,
-                                          std::chrono::milliseconds max_wait) {
+                                          std::chrono::milliseconds max_wait,
+                                          std::chrono::milliseconds tick) {
   if (!next_due) return max_wait;
-  const Duration left = *next_due - now;
+  SteadyTime wake = *next_due;
+  if (tick > Duration{0}) {
+    const Duration since_epoch = wake.time_since_epoch();
+    const Duration tick_length = tick;
+    const auto ticks = since_epoch / tick_length + (since_epoch % tick_length > Duration{0});
+    wake = SteadyTime(ticks * tick_length);
+  }
+  const Duration left = wake - now;
   if (left <= Duration{0}) return std::chrono::milliseconds{0};
   if (left >= max_wait) return max_wait;
   // Rounded up: waking before the event would only lead to a second, empty wait.
@@ -171,7 +179,7 @@ std::chrono::milliseconds Simulator::wait_budget() const {
     std::lock_guard lock(mutex_);
     due = bank_.next_due();
   }
-  return receive_timeout(due, options_.clock->steady(), options_.max_wait);
+  return receive_timeout(due, options_.clock->steady(), options_.max_wait, options_.timer_tick);
 }
 
 void Simulator::on_frame(const can::TimedFrame& received, std::vector<Outgoing>& out) {

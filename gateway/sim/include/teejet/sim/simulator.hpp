@@ -36,14 +36,22 @@ struct SimulatorOptions {
   // that stop(), add_valve() and inject_error() (and a ManualClock moved by a test) are seen
   // within this time even on a quiet bus.
   std::chrono::milliseconds max_wait{50};
+  // Periodic messages (resends, I'm Here, latched errors) go out on this timer tick, as valve
+  // firmware sends them from a timer interrupt: each keeps its own period and phase, and is sent
+  // at the first tick at or after it is due. 32 valves whose resends were armed at scattered
+  // moments otherwise wake the simulator, and the gateway reading it, ~230 times a second at
+  // any poll rate; with 10 ms, 100 at most. Replies to requests are never delayed. 0: no tick.
+  std::chrono::milliseconds timer_tick{10};
   codec::EncodeOptions encode_options{};
 };
 
 // How long the simulator thread waits for a frame when the next event is due at `next_due`
-// (nullopt: nothing scheduled): until the event, rounded up to a whole millisecond so that it
-// never wakes before the event is due; 0 when it is due already; never longer than `max_wait`.
+// (nullopt: nothing scheduled): until the first multiple of `tick` (on the steady clock) at or
+// after the event, rounded up to a whole millisecond so that it never wakes before the event is
+// due; 0 when it is due already; never longer than `max_wait`.
 std::chrono::milliseconds receive_timeout(std::optional<SteadyTime> next_due, SteadyTime now,
-                                          std::chrono::milliseconds max_wait);
+                                          std::chrono::milliseconds max_wait,
+                                          std::chrono::milliseconds tick = {});
 
 class Simulator {
  public:
