@@ -12,6 +12,9 @@ using namespace std::chrono_literals;
 constexpr Duration kDecodeReportPeriod = 10s;
 // Longest wait of either thread: the bridge has a deadline at least once a second anyway.
 constexpr Duration kLongestWait = 1s;
+// At shutdown, how long the last command statuses may take to be acknowledged by every reader
+// before the writer goes: long enough for a loaded machine, short enough for a service stop.
+constexpr Duration kLastStatusesWait = 500ms;
 // Frames taken off the bus per wake-up at most; the deadlines are looked at between batches.
 constexpr std::size_t kReceiveBatch = 64;
 
@@ -83,6 +86,18 @@ void Gateway::stop() {
     reader_.request_stop();
     backend_.bus->close();  // wakes the reader out of receive()
     reader_.join();
+  }
+  // A commander must not be left waiting: what is still followed (a move of a valve left
+  // running, a request awaiting its reply) ends now, and its status reaches the readers.
+  if (bridge_) {
+    if (const auto ended = bridge_->end_all_commands(); ended > 0) {
+      spdlog::info("{} command(s) still running ended TIMED_OUT on exit", ended);
+    }
+    if (publisher_ && !publisher_->wait_for_statuses(kLastStatusesWait)) {
+      spdlog::warn(
+          "not every reader acknowledged the last command statuses within {} ms",
+          std::chrono::duration_cast<std::chrono::milliseconds>(kLastStatusesWait).count());
+    }
   }
   // The publisher's writers go with the participant; the bridge writes through them.
   participant_.reset();

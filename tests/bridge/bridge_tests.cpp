@@ -471,6 +471,25 @@ TEST_F(BridgeTest, StopAllStopsEveryOnlineValve) {
   EXPECT_EQ(frames[0].data[0], 0x00);
 }
 
+TEST_F(BridgeTest, AtShutdownEveryCommandStillFollowedEndsSayingTheGatewayStopped) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 1, kStart);
+  announce(bridge, 0xD9, 2, kStart);
+  command_at(bridge, kStart, target(1, 80, 90.0f));  // a move the valve is left to finish
+  auto request = command(2, 81, COMMAND_REQUEST);
+  request.telemetry(TELEMETRY_VOLTAGE);
+  command_at(bridge, kStart, request);                       // awaiting its reply
+  command_at(bridge, kStart, command(2, 82, COMMAND_STOP));  // over already
+  (void)sent();
+  EXPECT_EQ(bridge.end_all_commands(), 2u);
+  EXPECT_EQ(sink.states_of(80), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(sink.states_of(81), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(sink.states_of(82), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(sink.last_reason(), "the gateway stopped before the command finished");
+  EXPECT_TRUE(sent().empty()) << "nothing is sent to the valves on the way out";
+  EXPECT_EQ(bridge.end_all_commands(), 0u);  // each ends once
+}
+
 TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);

@@ -20,6 +20,7 @@
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/topics.hpp"
+#include "teejet/sim/simulator.hpp"
 #include "teejet/valvePubSubTypes.h"
 
 namespace teejet::gateway {
@@ -380,6 +381,92 @@ TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
   EXPECT_NEAR(moved, 20.0, 1.0);
   const double untouched = position_of(left, 2);
   EXPECT_EQ(untouched, 0.0);
+}
+
+// Issue 10: the gateway restarted while a valve moves (a service restart with the valves left
+// running). The commander of the move hears that the first gateway stopped; the second learns
+// every valve within one I'm Here period, and the ECU sees the same DDS instances again.
+TEST_F(GatewayE2E, ARestartedGatewayRelearnsEveryValveAndTheEcuSeesTheSameInstances) {
+  const std::string bus_name = "restart-" + std::to_string(::getpid());
+  std::vector<sim::ValveConfig> valves;
+  for (std::uint32_t serial = 1; serial <= 4; ++serial) {
+    sim::ValveConfig valve;
+    valve.serial = serial;
+    valve.degrees_per_second = 20;  // 0 -> 80 takes 4 s: it is still moving at the restart
+    valves.push_back(valve);
+  }
+  sim::Simulator valves_on_the_bus(std::make_unique<can::VirtualBus>(
+                                       bus_name, can::VirtualBusOptions{can::valve_side_filters()}),
+                                   sim::SimulatorOptions{.valves = valves});
+  ASSERT_TRUE(valves_on_the_bus.start());
+  auto config = sim_config("gw-restart", 0);
+  config.can = "virtual:" + bus_name;
+  config.stop_valves_on_exit = false;
+  config.bridge.move_margin = 10s;
+  const auto position_now = [&](std::uint32_t serial) {
+    return valves_on_the_bus.inspect([&](const sim::ValveBank& bank) {
+      return bank.valve_with_serial(serial)->position(valves_on_the_bus.clock()->steady());
+    });
+  };
+
+  Ecu ecu(test_domain(), "restart-ecu");
+  auto* presence = ecu.reader<ValvePresence>();
+  auto* position = ecu.reader<ValvePosition>();
+  // The instance each serial has in the ECU's reader, from the samples it takes.
+  std::map<std::uint32_t, eprosima::fastrtps::rtps::InstanceHandle_t> instances;
+  std::map<std::uint32_t, bool> online;
+  const auto take_presence = [&] {
+    ValvePresence sample;
+    SampleInfo info;
+    while (presence->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
+      if (!info.valid_data) continue;
+      online[sample.serial()] = sample.online();
+      if (!instances.count(sample.serial())) instances[sample.serial()] = info.instance_handle;
+      EXPECT_EQ(instances[sample.serial()], info.instance_handle)
+          << "TJV" << sample.serial() << " became another instance";
+    }
+    return std::count_if(online.begin(), online.end(), [](auto& entry) { return entry.second; });
+  };
+
+  auto first = make_gateway(config);
+  start(*first, 4);
+  ASSERT_TRUE(eventually([&] { return take_presence() == 4; }, 15s));
+  const auto move = ecu.send(move_to(1, 80.0f));
+  ASSERT_TRUE(eventually([&] { return position_now(1) > 5.0; }, 5s)) << "the move never began";
+  first->stop();
+  const auto statuses = ecu.follow(move, 5s);
+  ASSERT_EQ(Ecu::states(statuses), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(statuses.back().reason().to_string(),
+            "the gateway stopped before the command finished");
+  first.reset();
+  EXPECT_LT(position_now(1), 75.0) << "the valve was meant to be still moving at the restart";
+
+  online.clear();
+  const auto restarted_at = std::chrono::steady_clock::now();
+  auto second = make_gateway(config);
+  ASSERT_TRUE(second->start());
+  ASSERT_TRUE(eventually([&] { return second->bridge().valves().size() == 4; }, 5s));
+  const auto relearned_after = std::chrono::steady_clock::now() - restarted_at;
+  // One I'm Here period (1 s), and the scheduling of a loaded machine.
+  EXPECT_LT(relearned_after, 1500ms);
+  std::printf("the restarted gateway knew all 4 valves after %lld ms\n",
+              static_cast<long long>(
+                  std::chrono::duration_cast<std::chrono::milliseconds>(relearned_after).count()));
+  ASSERT_TRUE(eventually([&] { return take_presence() == 4; }, 5s));
+  EXPECT_EQ(instances.size(), 4u);
+
+  // The valve kept moving on its own; the new gateway reports where it arrived.
+  std::map<std::uint32_t, ValvePosition> positions;
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest_by_serial(position, positions);
+        return positions.count(1) && positions[1].degrees() >= 79.0f;
+      },
+      10s));
+  EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(move_to(2, 10.0f)))),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  second->stop();
+  valves_on_the_bus.stop();
 }
 
 TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {

@@ -311,6 +311,17 @@ std::size_t Bridge::stop_all() {
   return stopped;
 }
 
+std::size_t Bridge::end_all_commands() {
+  std::lock_guard lock(mutex_);
+  Outcome outcome;
+  tracker_->abandon_all("the gateway stopped before the command finished", outcome);
+  const std::size_t ended = outcome.ended.size();
+  outcome.restore.clear();  // nobody is left to poll for
+  settle(outcome);
+  next_deadline_.reset();
+  return ended;
+}
+
 std::size_t Bridge::stop_commanded_by(const std::string& commander) {
   std::lock_guard lock(mutex_);
   std::size_t stopped = 0;

@@ -148,6 +148,16 @@ void CommandTracker::offline(std::uint32_t serial, Outcome& out) {
   valve.requests.clear();
 }
 
+void CommandTracker::abandon_all(const std::string& reason, Outcome& out) {
+  for (auto& [serial, valve] : valves_) {
+    end_motion(valve, COMMAND_TIMED_OUT, reason, out);
+    for (const auto& request : valve.requests) {
+      out.ended.push_back({request.command, COMMAND_TIMED_OUT, reason});
+    }
+    valve.requests.clear();
+  }
+}
+
 void CommandTracker::expire(SteadyTime now, Outcome& out) {
   for (auto& [serial, valve] : valves_) {
     if (valve.motion && valve.motion->deadline && now >= *valve.motion->deadline) {

@@ -47,6 +47,10 @@ class CommandTracker {
   // The valve went offline: nothing it was asked will be confirmed.
   void offline(std::uint32_t serial, Outcome& out);
 
+  // The gateway is going away: every command still followed ends TIMED_OUT with `reason`, so
+  // that no commander is left waiting for a status that nobody will send.
+  void abandon_all(const std::string& reason, Outcome& out);
+
   // Ends what is due at `now`.
   void expire(SteadyTime now, Outcome& out);
 

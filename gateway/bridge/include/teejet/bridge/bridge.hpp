@@ -101,6 +101,10 @@ class Bridge {
   // Sends Stop to every online valve; returns how many were sent. For shutdown.
   std::size_t stop_all();
 
+  // Shutdown, last: every command still followed (a move of a valve left running, a request
+  // awaiting its reply) ends TIMED_OUT, saying the gateway stopped. Returns how many.
+  std::size_t end_all_commands();
+
   // Fail-safe: a commander was lost; stop the valves it drove last. `commander` is a writer id
   // ("prefix|entity"), or a participant's GUID prefix, which stands for all of its writers.
   std::size_t stop_commanded_by(const std::string& commander);

@@ -63,6 +63,11 @@ class GatewayPublisher final : public bridge::Sink {
   void command_status(const CommandStatus& status) override;
   void gateway_status(const GatewayStatus& status) override;
 
+  // Waits until every matched reader acknowledged the statuses written so far, or `timeout`
+  // passes: the last statuses of a shutdown must not go down with the writer. True when all
+  // were acknowledged.
+  bool wait_for_statuses(Duration timeout);
+
  private:
   GatewayPublisher() = default;
 
