@@ -67,6 +67,7 @@ std::string default_gateway_name() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  survive_failed_writes();
   CLI::App app{"Puts every TeeJet CAN valve on DDS, keyed by serial, and carries commands back.",
                "teejet-gateway"};
   app.set_version_flag("--version", "teejet-gateway " TEEJET_VERSION);
@@ -121,7 +122,6 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  survive_failed_writes();
   // Signals are taken synchronously by this thread; every thread started later inherits the mask.
   // One that arrives while the gateway starts waits until it runs, and one that arrives during
   // the safe stop cannot cut it short.
