@@ -5,12 +5,58 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <csignal>
 
 #include "config.hpp"
 #include "gateway.hpp"
 
 namespace {
+
+constexpr int kExitUsage = 2;
+
+// The signals that end the gateway, each through the same safe stop (docs/gateway.md). A stop
+// asked for (SIGINT, SIGTERM) exits 0; the others exit 128 + n, as a shell reports a death by
+// that signal, so that a supervisor can tell them apart and restart on them.
+struct EndingSignal {
+  int number;
+  const char* name;
+  int exit_status;
+};
+constexpr std::array kEndingSignals{
+    EndingSignal{SIGTERM, "SIGTERM", 0},
+    EndingSignal{SIGINT, "SIGINT", 0},
+    EndingSignal{SIGHUP, "SIGHUP", 128 + SIGHUP},
+    EndingSignal{SIGQUIT, "SIGQUIT", 128 + SIGQUIT},
+    EndingSignal{SIGUSR1, "SIGUSR1", 128 + SIGUSR1},
+    EndingSignal{SIGUSR2, "SIGUSR2", 128 + SIGUSR2},
+    EndingSignal{SIGALRM, "SIGALRM", 128 + SIGALRM},
+    EndingSignal{SIGXCPU, "SIGXCPU", 128 + SIGXCPU},
+};
+
+const EndingSignal& ending_signal(int number) {
+  for (const auto& ending : kEndingSignals) {
+    if (ending.number == number) return ending;
+  }
+  return kEndingSignals.front();  // sigwait() only returns signals of the set
+}
+
+// A log that cannot be written (its reader gone, a full disk, a file size limit) must fail the
+// write, never kill the process before the valves are stopped: spdlog then drops the line.
+void survive_failed_writes() {
+  std::signal(SIGPIPE, SIG_IGN);
+  std::signal(SIGXFSZ, SIG_IGN);
+}
+
+// CLI11 turns an empty value into 0 or "" without a word: `--domain ""` would join domain 0.
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator not_empty(
+      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
+      "NOT_EMPTY");
+  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
+    if (option->get_items_expected_min() > 0) option->check(not_empty);
+  }
+}
 
 std::string default_gateway_name() {
   char host[256] = {};
@@ -21,6 +67,7 @@ std::string default_gateway_name() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  survive_failed_writes();
   CLI::App app{"Puts every TeeJet CAN valve on DDS, keyed by serial, and carries commands back.",
                "teejet-gateway"};
   app.set_version_flag("--version", "teejet-gateway " TEEJET_VERSION);
@@ -43,7 +90,14 @@ int main(int argc, char** argv) {
                "do not send Stop to every valve on exit");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-  CLI11_PARSE(app, argc, argv);
+  refuse_empty_values(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // CLI11's own codes (105, 109, ...) are not part of the interface: help and --version exit
+    // 0, every other parse error 2.
+    return app.exit(error) == 0 ? 0 : kExitUsage;
+  }
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   teejet::gateway::GatewayConfig config;
@@ -52,7 +106,7 @@ int main(int argc, char** argv) {
     auto loaded = teejet::gateway::load_config_file(config_file, config);
     if (!loaded) {
       spdlog::error("{}", loaded.error().reason);
-      return 2;
+      return kExitUsage;
     }
     config = std::move(loaded).value();
   }
@@ -65,29 +119,31 @@ int main(int argc, char** argv) {
   if (keep_valves_running) config.stop_valves_on_exit = false;
   if (config.can.empty()) {
     spdlog::error("no CAN bus: give --can IFACE (or sim:N), or gateway.can in the config file");
-    return 2;
+    return kExitUsage;
   }
 
   // Signals are taken synchronously by this thread; every thread started later inherits the mask.
+  // One that arrives while the gateway starts waits until it runs, and one that arrives during
+  // the safe stop cannot cut it short.
   sigset_t signals;
   sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
+  for (const auto& ending : kEndingSignals) sigaddset(&signals, ending.number);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
   auto backend = teejet::gateway::make_bus_backend(config);
   if (!backend) {
     spdlog::error("{}", backend.error().reason);
-    return 2;
+    return kExitUsage;
   }
   teejet::gateway::Gateway gateway(config, std::move(*backend));
   if (auto started = gateway.start(); !started) {
     spdlog::error("cannot start: {}", started.error().reason);
     return 1;
   }
-  int signal = 0;
-  sigwait(&signals, &signal);
-  spdlog::info("{}: shutting down", signal == SIGINT ? "SIGINT" : "SIGTERM");
+  int number = SIGTERM;
+  sigwait(&signals, &number);
+  const EndingSignal& ending = ending_signal(number);
+  spdlog::info("{}: shutting down", ending.name);
   gateway.stop();
-  return 0;
+  return ending.exit_status;
 }

@@ -78,6 +78,43 @@ TEST(SimCli, UsageErrorsExitTwoAndSayWhy) {
                      "cannot read config file '/nonexistent/sim.yaml'");
 }
 
+// The documented 2, not CLI11's internal codes (109 unknown, 105 conversion, 114 missing).
+TEST(SimCli, UnknownFlagsBadAndMissingValuesExitTwo) {
+  expect_usage_error({"--can", "virtual:x", "--valves", "1", "--no-such-flag"}, "--no-such-flag");
+  expect_usage_error({"--can", "virtual:x", "--valves", "many"}, "--valves");
+  expect_usage_error({"--can", "virtual:x", "--valves", "-1"}, "--valves");
+  expect_usage_error({"--can", "virtual:x", "--valves", "1", "--dps", "fast"}, "--dps");
+  expect_usage_error({"--can", "virtual:x", "--valves"}, "--valves");
+  expect_usage_error({"--valves", "1", "--can"}, "--can");
+  const auto version = run({"--version"});
+  EXPECT_EQ(version.exit_code, 0);
+  EXPECT_EQ(version.out.rfind("valve-sim ", 0), 0u) << version.out;
+}
+
+// CLI11 makes 0 of an empty value: `--closed ""` was a Closed Degrees of 0.
+TEST(SimCli, EmptyValuesAreUsageErrorsNamingTheOption) {
+  for (const char* option : {"--dps", "--closed", "--opened", "--start", "--opening-direction",
+                             "--config", "--inject-error"}) {
+    // --opening-direction's list of words speaks first: " not in {clockwise,counterclockwise}".
+    expect_usage_error({"--can", "virtual:x", "--valves", "1", option, ""},
+                       std::string(option) + ": ");
+  }
+  expect_usage_error({"--can", "virtual:x", "--valves", "1", "--closed", ""},
+                     "--closed: the value is empty");
+  expect_usage_error({"--can", "", "--valves", "1"}, "--can: the value is empty");
+  expect_usage_error({"--can", "virtual:x", "--valves", ""}, "--valves: the value is empty");
+  expect_usage_error({"--can", "virtual:x", "--serials", ""}, "--serials: the value is empty");
+}
+
+TEST(SimCli, NotANumberOrInfiniteSettingsAreRefused) {
+  for (const char* option : {"--dps", "--closed", "--opened", "--start"}) {
+    for (const char* value : {"nan", "inf", "1e400"}) {
+      const auto result = run({"--can", "virtual:x", "--valves", "1", option, value});
+      EXPECT_EQ(result.exit_code, 2) << option << ' ' << value << ": " << result.err;
+    }
+  }
+}
+
 TEST(SimCli, ConfigFileMistakesExitTwoWithTheLine) {
   ScratchDir dir;
   const auto path = dir / "sim.yaml";

@@ -200,10 +200,59 @@ TEST(ValveDecodeEndToEnd, HelpExplainsTheFormat) {
   }
 }
 
-TEST(ValveDecodeEndToEnd, UnknownOptionIsAUsageError) {
-  const auto run = run_valve_decode({"--no-such-option"});
-  EXPECT_NE(run.exit_code, 0);
+// valve-decode through /bin/sh, for standard inputs a test cannot give it otherwise.
+Finished run_with_redirection(const std::string& redirection) {
+  auto finished =
+      teejet::testing::run({"/bin/sh", "-c", "exec \"$0\" " + redirection, kValveDecode});
+  EXPECT_FALSE(finished.timed_out) << "valve-decode did not exit";
+  return finished;
+}
+
+TEST(ValveDecodeEndToEnd, StandardInputThatIsADirectoryIsAReadError) {
+  ScratchDir dir;
+  const auto run = run_with_redirection("< '" + dir.path().string() + "'");
+  EXPECT_EQ(run.exit_code, 1);
   EXPECT_EQ(run.out, "");
+  EXPECT_EQ(run.err, "valve-decode: error reading standard input: Is a directory\n");
+}
+
+TEST(ValveDecodeEndToEnd, ClosedStandardInputIsAReadError) {
+  const auto run = run_with_redirection("<&-");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_EQ(run.out, "");
+  EXPECT_EQ(run.err, "valve-decode: error reading standard input: Bad file descriptor\n");
+}
+
+TEST(ValveDecodeEndToEnd, AnUnreadableStandardInputStillLetsTheFilesDecode) {
+  const auto run = run_with_redirection("'" + std::string(kSampleLog) + "' - '" +
+                                        std::string(kSampleLog) + "' <&-");
+  EXPECT_EQ(run.exit_code, 1);
+  expect_same_lines(run.out, read_file(kSampleExpected) + read_file(kSampleExpected));
+  EXPECT_EQ(run.err, "valve-decode: error reading standard input: Bad file descriptor\n");
+}
+
+TEST(ValveDecodeEndToEnd, AnEmptyFileNameCannotBeOpened) {
+  const auto run = run_valve_decode({"", kSampleLog});
+  EXPECT_EQ(run.exit_code, 1);
+  expect_same_lines(run.out, read_file(kSampleExpected));
+  EXPECT_NE(run.err.find("cannot open ''"), std::string::npos) << run.err;
+}
+
+// The documented usage status, not CLI11's internal code (109 for an unknown option).
+// valve-decode has no option that takes a value: unknown options are the only bad command line.
+TEST(ValveDecodeEndToEnd, UnknownOptionsExitTwoAndSayWhich) {
+  for (const char* option : {"--no-such-option", "-x", "--json"}) {
+    const auto run = run_valve_decode({option, kSampleLog});
+    EXPECT_EQ(run.exit_code, 2) << option;
+    EXPECT_EQ(run.out, "") << option;
+    EXPECT_NE(run.err.find(option), std::string::npos) << run.err;
+  }
+}
+
+TEST(ValveDecodeEndToEnd, VersionExitsZero) {
+  const auto run = run_valve_decode({"--version"});
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.out.rfind("valve-decode ", 0), 0u) << run.out;
 }
 
 }  // namespace

@@ -206,5 +206,114 @@ TEST(ValvectlCommandLine, HelpExitsZeroOnStandardOutput) {
   EXPECT_NE(move_help.out.find("--direction"), std::string::npos);
 }
 
+// `move "" --to 10` exited 0 having sent nothing, and `--to ""` moved the valve to 0 degrees:
+// CLI11 makes 0 of an empty value.
+TEST(ValvectlCommandLine, EmptyValuesAreRefusedNamingTheOption) {
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+      {{"move", "", "--to", "10"}, "SERIAL: the value is empty"},
+      {{"stop", ""}, "SERIAL: the value is empty"},
+      {{"move", "1", "--to", ""}, "--to: the value is empty"},
+      {{"move", "1", "--to", "10", "--speed", ""}, "--speed: the value is empty"},
+      {{"move", "1", "--to", "10", "--direction", ""}, "--direction: the value is empty"},
+      {{"move", "1", "--to", "10", "--wait", "--wait-timeout", ""}, "--wait-timeout: the value"},
+      {{"manual", "1", "--speed", "", "--direction", "open"}, "--speed: the value is empty"},
+      {{"jog", "1", "--ms", ""}, "--ms: the value is empty"},
+      {{"request", "1", ""}, "WHAT: the value is empty"},
+      {{"request", "1", "position", "--every", ""}, "--every: the value is empty"},
+      {{"baud", "1", "--set", ""}, "--set: the value is empty"},
+      {{"list", "--wait-for", ""}, "--wait-for: the value is empty"},
+      {{"watch", "--interval", ""}, "--interval: the value is empty"},
+      {{"watch", "--duration", ""}, "--duration: the value is empty"},
+      {{"--timeout", "", "list"}, "--timeout: the value is empty"},
+      {{"--domain", "", "list"}, "--domain: the value is empty"},
+      {{"--profile", "", "list"}, "--profile: File does not exist"},
+  };
+  for (const auto& [args, message] : cases) {
+    const std::string error = usage_error(args);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+// Each numeric option against the classes of bad values: empty, not a number, infinite, huge,
+// negative, and C's other bases for the whole numbers. Every one exits 64 naming the option,
+// with no invocation: nothing reaches DDS.
+TEST(ValvectlCommandLine, EveryNumericOptionRefusesNanInfHugeAndNegative) {
+  struct Case {
+    std::vector<std::string> before;  // the arguments up to the option
+    std::string option;
+    std::vector<std::string> after;  // required arguments after it
+    std::vector<std::string> bad;
+  };
+  const std::vector<std::string> whole_bad{
+      "",     "nan", "inf", "-1", "1e10", "99999999999999999999", "-18446744073709551615",
+      "0x10", "1.5", " 5"};
+  const std::vector<std::string> real_bad{"", "nan", "inf", "-inf", "1e10", "1e400", "-1", "x"};
+  const std::vector<Case> cases{
+      {{"move", "1"}, "--to", {}, real_bad},
+      {{"move", "1", "--to", "10"}, "--speed", {}, whole_bad},
+      {{"move", "1", "--to", "10"}, "--wait-timeout", {}, real_bad},
+      {{"manual", "1", "--direction", "open"}, "--speed", {}, whole_bad},
+      {{"jog", "1"}, "--ms", {}, whole_bad},
+      {{"jog", "1", "--ms", "10"}, "--speed", {}, whole_bad},
+      {{"request", "1", "position"}, "--every", {}, whole_bad},
+      {{"baud", "1"}, "--set", {}, whole_bad},
+      {{"list"}, "--wait-for", {}, whole_bad},
+      {{"watch"}, "--interval", {}, whole_bad},
+      {{"watch"}, "--duration", {}, real_bad},
+      {{"list"}, "--timeout", {}, real_bad},
+      {{"list"}, "--domain", {}, whole_bad},
+  };
+  for (const auto& [before, option, after, bad] : cases) {
+    for (const auto& value : bad) {
+      auto args = before;
+      args.push_back(option);
+      args.push_back(value);
+      args.insert(args.end(), after.begin(), after.end());
+      const std::string error = usage_error(args);
+      EXPECT_NE(error.find(option), std::string::npos) << option << " '" << value << "': " << error;
+    }
+  }
+}
+
+// `list --timeout 1e10` gave up after 150 ms: the deadline overflowed the steady clock.
+TEST(ValvectlCommandLine, DurationsAreFromAMillisecondToAnHourOrADayForAWatch) {
+  EXPECT_NE(usage_error({"list", "--timeout", "1e10"})
+                .find("--timeout 1e+10 is not a number of seconds from 0.001 to 3600"),
+            std::string::npos);
+  EXPECT_NE(usage_error({"list", "--timeout", "3600.1"}).find("0.001 to 3600"), std::string::npos);
+  EXPECT_NE(usage_error({"list", "--timeout", "0.0004"}).find("0.001 to 3600"), std::string::npos);
+  EXPECT_EQ(parse({"list", "--timeout", "3600"}).invocation->global.timeout, 3600s);
+  EXPECT_EQ(parse({"list", "--timeout", "0.001"}).invocation->global.timeout, 1ms);
+  EXPECT_EQ(command_of({"stop", "1", "--wait", "--wait-timeout", "3600"}).wait_timeout, 3600s);
+  usage_error({"stop", "1", "--wait", "--wait-timeout", "3601"});
+  EXPECT_EQ(parse({"watch", "--duration", "86400"}).invocation->watch.duration, 86400s);
+  EXPECT_NE(usage_error({"watch", "--duration", "86401"}).find("0.001 to 86400"),
+            std::string::npos);
+}
+
+// CLI11 reads integers as C does; a person means decimal.
+TEST(ValvectlCommandLine, LeadingZerosAreDecimal) {
+  const auto jog = command_of({"jog", "1", "--ms", "0100", "--speed", "010"});
+  EXPECT_EQ(jog.command.milliseconds(), 100);
+  EXPECT_EQ(jog.command.speed_percent(), 10);
+  EXPECT_EQ(command_of({"jog", "1", "--ms", "000"}).command.milliseconds(), 0);
+  EXPECT_EQ(parse({"--domain", "010", "list"}).invocation->global.domain, 10);
+}
+
+TEST(ValvectlCommandLine, MoveToInfinityIsOutOfRange) {
+  EXPECT_NE(usage_error({"move", "1", "--to", "inf"}).find("0 to 359.9"), std::string::npos);
+}
+
+// The documented usage status, not CLI11's internal codes (109, 114, ...).
+TEST(ValvectlCommandLine, UnknownFlagsBadAndMissingValuesExit64) {
+  EXPECT_NE(usage_error({"list", "--no-such-flag"}).find("--no-such-flag"), std::string::npos);
+  EXPECT_NE(usage_error({"--domain", "seven", "list"}).find("--domain"), std::string::npos);
+  EXPECT_NE(usage_error({"list", "--domain"}).find("--domain"), std::string::npos);
+  EXPECT_NE(usage_error({"move", "1", "--to"}).find("--to"), std::string::npos);
+  const auto version = parse({"--version"});
+  EXPECT_EQ(version.exit_code, kExitOk);
+  EXPECT_EQ(version.out.rfind("valvectl ", 0), 0u) << version.out;
+}
+
 }  // namespace
 }  // namespace teejet::valvectl

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "render.hpp"
 
 namespace teejet::valvectl {
@@ -124,6 +126,36 @@ TEST(ValvectlRender, GatewayLine) {
   EXPECT_EQ(render_gateways({gateway}),
             "gateway boom on can0: error_passive, 3/4 valves online, 100 frames in, 20 out, 0 "
             "decode errors\n");
+}
+
+// --json printed 74.60000000000001 for the 74.6 a valve sent. Every value of the wire's grid,
+// as the float DDS carries it, prints as the decimal the valve sent.
+TEST(ValvectlRender, JsonPrintsEveryPositionOfTheSheetAsTheValveSentIt) {
+  EXPECT_EQ(position_json(1, at_resolution(74.6f, 10)).dump(),
+            R"({"degrees":74.6,"event":"position","serial":"TJV000001"})");
+  int wrong = 0;
+  for (int tenths = 0; tenths <= 3599; ++tenths) {
+    char expected[16];
+    std::snprintf(expected, sizeof expected, "%d.%d", tenths / 10, tenths % 10);
+    const auto sent = static_cast<float>(tenths) / 10.0f;
+    const std::string printed = nlohmann::json(at_resolution(sent, 10)).dump();
+    if (printed != expected) {
+      ++wrong;
+      ADD_FAILURE() << "sent " << expected << ", printed " << printed;
+    }
+  }
+  EXPECT_EQ(wrong, 0);
+}
+
+TEST(ValvectlRender, JsonPrintsHundredthsAsTheValveSentThem) {
+  for (const auto& [sent, expected] : std::vector<std::pair<float, std::string>>{
+           {0.35f, "0.35"}, {1.07f, "1.07"}, {12.29f, "12.29"}, {655.35f, "655.35"}}) {
+    EXPECT_EQ(nlohmann::json(at_resolution(sent, 100)).dump(), expected);
+  }
+  ValveRow row;
+  row.serial = 2;
+  row.volts = at_resolution(13.7f, 10);
+  EXPECT_EQ(to_json(row)["volts"].dump(), "13.7");
 }
 
 }  // namespace

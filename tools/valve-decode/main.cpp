@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -17,6 +18,7 @@
 namespace {
 
 constexpr std::string_view kStandardInput = "-";
+constexpr int kExitUsage = 2;
 
 constexpr const char* kDescription =
     "Decodes TeeJet CAN valve traffic from can-utils `candump -L` logs into JSON Lines.";
@@ -40,8 +42,9 @@ and decoding goes on. Blank lines are skipped: candump never writes them.
 Output is flushed after every line read from standard input, so that
 `candump -L can0 | valve-decode` is live.
 
-Exit status: 0, also when some lines did not decode; 1 when a FILE could not be read
-(the other FILEs are still decoded) or the output could not be written.)";
+Exit status: 0, also when some lines did not decode; 1 when a FILE or standard input could
+not be read (the other FILEs are still decoded) or the output could not be written; 2 for a
+bad command line.)";
 
 std::string decode_line(std::string_view line) {
   namespace valve_decode = teejet::valve_decode;
@@ -57,8 +60,9 @@ bool is_blank(std::string_view line) {
                      [](char c) { return c == ' ' || c == '\t' || c == '\r'; });
 }
 
-// Returns false when reading stopped on an error rather than at the end of the input.
-bool decode_stream(std::istream& input, bool flush_each_line) {
+// Returns 0 at the end of the input, or the errno of the read that failed.
+int decode_stream(std::istream& input, std::FILE* c_stream, bool flush_each_line) {
+  errno = 0;
   std::string line;
   while (std::getline(input, line)) {
     std::string_view text = line;
@@ -69,24 +73,30 @@ bool decode_stream(std::istream& input, bool flush_each_line) {
     // cout happens to flush too, but that is easy to lose when tuning stream settings.
     if (flush_each_line) std::cout.flush();
   }
-  return !input.bad();
+  // std::cin reads through stdio, which ends a failed read (a directory, a closed descriptor)
+  // like the end of the input, without setting badbit: only the FILE knows it was an error.
+  const bool failed = input.bad() || (c_stream != nullptr && std::ferror(c_stream) != 0);
+  if (!failed) return 0;
+  return errno != 0 ? errno : EIO;
 }
 
 // Returns false, after saying why on stderr, when the file could not be read to the end.
 bool decode_file(const std::string& path) {
-  errno = 0;
   if (path == kStandardInput) {
-    if (decode_stream(std::cin, /*flush_each_line=*/true)) return true;
-    std::cerr << "valve-decode: error reading standard input: " << std::strerror(errno) << '\n';
+    const int error = decode_stream(std::cin, stdin, /*flush_each_line=*/true);
+    if (error == 0) return true;
+    std::cerr << "valve-decode: error reading standard input: " << std::strerror(error) << '\n';
     return false;
   }
+  errno = 0;
   std::ifstream input(path);
   if (!input) {
     std::cerr << "valve-decode: cannot open '" << path << "': " << std::strerror(errno) << '\n';
     return false;
   }
-  if (decode_stream(input, /*flush_each_line=*/false)) return true;
-  std::cerr << "valve-decode: error reading '" << path << "': " << std::strerror(errno) << '\n';
+  const int error = decode_stream(input, nullptr, /*flush_each_line=*/false);
+  if (error == 0) return true;
+  std::cerr << "valve-decode: error reading '" << path << "': " << std::strerror(error) << '\n';
   return false;
 }
 
@@ -99,7 +109,13 @@ int main(int argc, char** argv) {
   std::vector<std::string> paths;
   app.add_option("FILE", paths, "candump -L log files; none or \"-\" reads standard input")
       ->type_name("");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    // CLI11's own codes (105, 109, ...) are not part of the interface: help and --version exit
+    // 0, every other parse error 2.
+    return app.exit(error) == 0 ? 0 : kExitUsage;
+  }
 
   if (paths.empty()) paths.emplace_back(kStandardInput);
   bool all_read = true;

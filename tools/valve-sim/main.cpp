@@ -55,6 +55,17 @@ std::shared_ptr<spdlog::logger> make_logger() {
   return logger;
 }
 
+// CLI11 turns an empty value into 0 or "" without a word: `--dps ""` would be 0 degrees per
+// second, `--closed ""` a Closed Degrees of 0.
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator not_empty(
+      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
+      "NOT_EMPTY");
+  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
+    if (option->get_items_expected_min() > 0) option->check(not_empty);
+  }
+}
+
 // Adds the next valve: a `hotplug:` entry while there are any, then an automatic serial.
 void add_valve(sim::Simulator& simulator, const sim::Setup& setup,
                std::deque<sim::ValveConfig>& hotplug, spdlog::logger& logger) {
@@ -151,6 +162,7 @@ int main(int argc, char** argv) {
       ->type_name("SERIAL:KIND:VALUE:LIMIT");
   app.add_flag("-v,--verbose", verbose, "log every frame received and sent, decoded");
 
+  refuse_empty_values(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

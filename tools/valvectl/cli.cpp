@@ -1,6 +1,7 @@
 #include "cli.hpp"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
@@ -65,11 +66,48 @@ struct Parser {
 
 [[noreturn]] void usage_error(const std::string& message) { throw CLI::ValidationError(message); }
 
-std::chrono::milliseconds seconds_option(const char* option, double seconds) {
-  if (!std::isfinite(seconds) || seconds <= 0.0) {
-    usage_error(std::string(option) + " must be a positive number of seconds");
+// Durations are whole milliseconds, at least one and at most `max_seconds`: an hour for the
+// waits, a day for a watch. Beyond that a deadline is no longer a deadline, and far beyond it
+// (1e10 s) the steady clock overflows and the wait ends at once.
+constexpr double kMaxWaitSeconds = 3600.0;
+constexpr double kMaxWatchSeconds = 86400.0;
+
+std::chrono::milliseconds seconds_option(const char* option, double seconds, double max_seconds) {
+  const double milliseconds = std::round(seconds * 1000.0);
+  if (!std::isfinite(seconds) || milliseconds < 1.0 || seconds > max_seconds) {
+    std::ostringstream message;
+    message << option << ' ' << seconds << " is not a number of seconds from 0.001 to "
+            << max_seconds;
+    usage_error(message.str());
   }
-  return std::chrono::milliseconds(static_cast<long long>(std::llround(seconds * 1000.0)));
+  return std::chrono::milliseconds(static_cast<long long>(milliseconds));
+}
+
+// CLI11 makes 0 of an empty value (`--to ""` would move the valve to 0 degrees) and reads
+// integers as C does: "-1" wraps around, "010" is 8 and "0x10" 16. A whole-number option takes
+// decimal digits only; every option refuses an empty value.
+const CLI::Validator kWholeNumber(
+    [](std::string& value) -> std::string {
+      if (value.empty()) return "the value is empty";
+      if (value.find_first_not_of("0123456789") != std::string::npos) {
+        return "'" + value + "' is not a whole number";
+      }
+      // CLI11 would read a leading 0 as octal.
+      value.erase(0, std::min(value.find_first_not_of('0'), value.size() - 1));
+      return "";
+    },
+    "", "WHOLE_NUMBER");
+
+void refuse_empty_values(CLI::App& app) {
+  const CLI::Validator not_empty(
+      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
+      "NOT_EMPTY");
+  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
+    if (option->get_items_expected_min() > 0) option->check(not_empty);
+  }
+  for (CLI::App* subcommand : app.get_subcommands([](CLI::App*) { return true; })) {
+    refuse_empty_values(*subcommand);
+  }
 }
 
 void add_serial(CLI::App* subcommand, RawArguments& raw, bool required = true) {
@@ -86,7 +124,8 @@ void add_wait(Parser& parser, CLI::App* subcommand, const char* what) {
 }
 
 void add_drive(CLI::App* subcommand, RawArguments& raw, bool required, bool shortest) {
-  auto* speed = subcommand->add_option("--speed", raw.speed, "drive speed in percent, 0 to 100");
+  auto* speed = subcommand->add_option("--speed", raw.speed, "drive speed in percent, 0 to 100")
+                    ->transform(kWholeNumber);
   auto* direction = subcommand->add_option("--direction", raw.direction,
                                            shortest ? "open, close or shortest" : "open or close");
   if (required) {
@@ -113,6 +152,7 @@ void define(Parser& parser) {
   app.fallthrough();
   app.add_option("--domain", global.domain, "DDS domain of the gateway")
       ->capture_default_str()
+      ->transform(kWholeNumber)
       ->check(CLI::Range(0, dds::kMaxDomain));
   app.add_option("--profile", global.profile_file, "Fast DDS XML profiles file, as the gateway's")
       ->check(CLI::ExistingFile);
@@ -125,11 +165,13 @@ void define(Parser& parser) {
   parser.list
       ->add_option("--wait-for", parser.invocation.list.wait_for_online,
                    "wait (up to --timeout) until at least N valves are online")
-      ->type_name("N");
+      ->type_name("N")
+      ->transform(kWholeNumber);
 
   parser.watch = app.add_subcommand("watch", "the table, refreshed until Ctrl-C");
   parser.watch->add_option("--interval", raw.interval_ms, "refresh period in milliseconds")
       ->capture_default_str()
+      ->transform(kWholeNumber)
       ->check(CLI::Range(50, 3'600'000));
   parser.duration = parser.watch->add_option("--duration", raw.duration_seconds,
                                              "stop after this many seconds (default: Ctrl-C)");
@@ -154,7 +196,8 @@ void define(Parser& parser) {
   parser.jog = app.add_subcommand("jog", "drive a valve for a time (Milliseconds to Run)");
   add_serial(parser.jog, raw);
   parser.jog->add_option("--ms", raw.milliseconds, "run time in milliseconds, 0 to 65535")
-      ->required();
+      ->required()
+      ->transform(kWholeNumber);
   add_drive(parser.jog, raw, /*required=*/false, /*shortest=*/false);
   add_wait(parser, parser.jog, "wait until the run time is over");
 
@@ -173,7 +216,8 @@ void define(Parser& parser) {
       ->add_option("--every", raw.every_tenths,
                    "resend automatically every TENTHS of a second, 1 to 255; 0 = once")
       ->type_name("TENTHS")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->transform(kWholeNumber);
   add_wait(parser, parser.request, "wait for the reply and print it");
 
   parser.baud = app.add_subcommand("baud", "request or set a valve's CAN bit rate");
@@ -181,7 +225,9 @@ void define(Parser& parser) {
   parser.baud->add_flag("--request", raw.baud_request, "ask the valve for its bit rate");
   parser.bit_rate = parser.baud->add_option(
       "--set", raw.bit_rate, "set the bit rate, 250000 or 500000 (the gateway must allow it)");
+  parser.bit_rate->transform(kWholeNumber);
   add_wait(parser, parser.baud, "wait for the valve's reply (--request) and print it");
+  refuse_empty_values(app);
 }
 
 std::uint32_t checked_serial(const std::string& text) {
@@ -251,7 +297,8 @@ void build_command(Parser& parser, CLI::App* used) {
   ValveCommand& command = request.command;
   request.subcommand = used->get_name();
   request.wait = raw.wait;
-  request.wait_timeout = seconds_option("--wait-timeout", raw.wait_timeout_seconds);
+  request.wait_timeout =
+      seconds_option("--wait-timeout", raw.wait_timeout_seconds, kMaxWaitSeconds);
 
   if (used == parser.stop) {
     if (raw.all == !raw.serial.empty()) usage_error("stop: give either a SERIAL or --all");
@@ -304,7 +351,8 @@ void build_command(Parser& parser, CLI::App* used) {
 
 void build_invocation(Parser& parser) {
   Invocation& invocation = parser.invocation;
-  invocation.global.timeout = seconds_option("--timeout", parser.raw.timeout_seconds);
+  invocation.global.timeout =
+      seconds_option("--timeout", parser.raw.timeout_seconds, kMaxWaitSeconds);
   CLI::App* used = parser.app.get_subcommands().front();
   if (used == parser.list) {
     invocation.subcommand = Subcommand::kList;
@@ -312,7 +360,8 @@ void build_invocation(Parser& parser) {
     invocation.subcommand = Subcommand::kWatch;
     invocation.watch.interval = std::chrono::milliseconds(parser.raw.interval_ms);
     if (parser.duration->count() > 0) {
-      invocation.watch.duration = seconds_option("--duration", parser.raw.duration_seconds);
+      invocation.watch.duration =
+          seconds_option("--duration", parser.raw.duration_seconds, kMaxWatchSeconds);
     }
   } else {
     invocation.subcommand = Subcommand::kCommand;

@@ -1,6 +1,7 @@
 #include "render.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -45,6 +46,12 @@ std::string one_decimal(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.1f", value);
   return text;
+}
+
+double at_resolution(float value, int steps_per_unit) {
+  // Dividing by the whole number of steps, not multiplying by the inexact 0.1, is what lands on
+  // the double nearest to the decimal.
+  return std::round(static_cast<double>(value) * steps_per_unit) / steps_per_unit;
 }
 
 std::string render_table(const std::vector<ValveRow>& rows) {

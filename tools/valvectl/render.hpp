@@ -39,4 +39,10 @@ nlohmann::json reply_json(std::uint32_t serial, const std::string& name, const R
 // One decimal, as the wire resolves degrees and volts: 45 -> "45.0".
 std::string one_decimal(double value);
 
+// A value as the valve sent it, on the sheet's grid (`steps_per_unit` 10 for 0.1, 100 for
+// 0.01), so that JSON, which prints the shortest decimal that reads back as the same double,
+// prints what the valve sent: the float 74.6f on DDS is 74.59999847..., and 746 * 0.1 is
+// 74.60000000000001; this gives the double nearest to 74.6, printed "74.6".
+double at_resolution(float value, int steps_per_unit);
+
 }  // namespace teejet::valvectl

@@ -1,11 +1,11 @@
 #include "valve_view.hpp"
 
-#include <cmath>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <vector>
 
 #include "names.hpp"
+#include "render.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -17,11 +17,6 @@ using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 namespace {
-
-// Floats on the wire carry 0.1 or 0.01 resolution; round so that 12.3f prints as 12.3.
-double rounded(float value, double resolution) {
-  return std::round(static_cast<double>(value) / resolution) * resolution;
-}
 
 std::string version_text(const SoftwareVersion& version) {
   return codec::format_version(
@@ -90,14 +85,14 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
   gateway_status_reader_ = subscribe<GatewayStatus>(
       [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
   subscribe<ValvePosition>([this](const ValvePosition& sample) {
-    table_.on_position(sample.serial(), rounded(sample.degrees(), 0.1), sample.received_ns());
+    table_.on_position(sample.serial(), at_resolution(sample.degrees(), 10), sample.received_ns());
   });
   subscribe<ValveTemperature>([this](const ValveTemperature& sample) {
     table_.on_temperature(sample.serial(), sample.valve_c(), sample.sensor_c(),
                           sample.received_ns());
   });
   subscribe<ValveVoltage>([this](const ValveVoltage& sample) {
-    table_.on_voltage(sample.serial(), rounded(sample.volts(), 0.1), sample.received_ns());
+    table_.on_voltage(sample.serial(), at_resolution(sample.volts(), 10), sample.received_ns());
   });
   subscribe<ValveVersion>([this](const ValveVersion& sample) {
     table_.on_reply(sample.serial(), reply_name(TELEMETRY_VERSION),
@@ -108,8 +103,8 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
   subscribe<ValveCurrent>([this](const ValveCurrent& sample) {
     table_.on_reply(sample.serial(), reply_name(TELEMETRY_CURRENT),
                     {sample.received_ns(),
-                     {{"amps", rounded(sample.amps(), 0.01)},
-                      {"last_running_amps", rounded(sample.last_running_amps(), 0.01)}}});
+                     {{"amps", at_resolution(sample.amps(), 100)},
+                      {"last_running_amps", at_resolution(sample.last_running_amps(), 100)}}});
   });
   subscribe<ValveDegreesPerSecond>([this](const ValveDegreesPerSecond& sample) {
     table_.on_reply(sample.serial(), reply_name(TELEMETRY_DEGREES_PER_SECOND),
