@@ -86,3 +86,9 @@ endif()
 replace_checked("${DIR}/${NAME}PubSubTypes.cxx"
                 "(\n        setName\\(\"[A-Za-z0-9_:]+\"\\);)"
                 "\\1${announce}" ${types})
+
+# 3. fastcdr's Cdr.h before the type-object header's `using namespace eprosima::fastrtps::types`:
+#    seen after it, Cdr.h's `m_endianness == endianness` also finds TypesBase.h's reversed
+#    operator==(T, const ReturnCode_t&), which clang (C++20) rejects as ambiguous.
+replace_checked("${DIR}/${NAME}TypeObject.h" "\n#include <fastrtps/types/TypeObject.h>\n"
+                "\n#include <fastcdr/Cdr.h>\n#include <fastrtps/types/TypeObject.h>\n" 1)

@@ -53,6 +53,11 @@ PACKAGES=(
   util-linux
   # formatting
   clang-format
+  # sanitizer builds and fuzz targets (asan, tsan presets): clang, its sanitizer and libFuzzer
+  # runtimes, and llvm-symbolizer (package llvm) for file:line in reports
+  clang
+  libclang-rt-14-dev
+  llvm
 )
 
 log() { printf 'install-deps: %s\n' "$*" >&2; }

@@ -15,12 +15,20 @@ tj_install_deps() {
   "$REPO_ROOT/tools/install-deps.sh"
 }
 
+# tj_configure [PRESET [DIR]]: defaults $PRESET and $BUILD_DIR.
 tj_configure() {
-  cmake --preset "$PRESET" -B "$BUILD_DIR"
+  cmake --preset "${1:-$PRESET}" -B "${2:-$BUILD_DIR}"
 }
 
+# tj_build [DIR [TARGET...]]: defaults $BUILD_DIR and every target.
 tj_build() {
-  cmake --build "$BUILD_DIR" -j"$(nproc)"
+  local dir="${1:-$BUILD_DIR}"
+  shift $(($# > 0 ? 1 : 0))
+  if (($# > 0)); then
+    cmake --build "$dir" -j"$(nproc)" --target "$@"
+  else
+    cmake --build "$dir" -j"$(nproc)"
+  fi
 }
 
 # Microseconds since the epoch (EPOCHREALTIME's decimal separator follows the locale).

@@ -174,9 +174,10 @@ void CommandTracker::expire(SteadyTime now, Outcome& out) {
                    out);
       }
     }
-    std::erase_if(valve.requests, [&](const Tracked& request) {
+    // Captured by name: clang before 16 cannot capture a structured binding.
+    std::erase_if(valve.requests, [&, valve_serial = serial](const Tracked& request) {
       if (now < *request.deadline) return false;
-      end_request(serial, request, COMMAND_TIMED_OUT,
+      end_request(valve_serial, request, COMMAND_TIMED_OUT,
                   "no reply within " +
                       std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(
                                          config_.reply_timeout)

@@ -11,6 +11,9 @@ template <class... Fs>
 struct Overloaded : Fs... {
   using Fs::operator()...;
 };
+// C++20 deduces this from the aggregate alone; clang before 17 (the sanitizer builds) needs it.
+template <class... Fs>
+Overloaded(Fs...) -> Overloaded<Fs...>;
 
 teejet::Direction to_idl(codec::Direction d) {
   return d == codec::Direction::kOpen ? DIRECTION_OPEN : DIRECTION_CLOSE;
