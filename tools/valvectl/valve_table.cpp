@@ -120,9 +120,11 @@ std::size_t ValveTable::online_count() const {
 bool ValveTable::directory_complete() const {
   if (gateways_.empty() || gateways_.size() < gateways_matched_) return false;
   for (const auto& [name, summary] : gateways_) {
-    const auto known = std::count_if(rows_.begin(), rows_.end(), [&](const auto& item) {
-      return item.second.present && item.second.row.gateway == name;
-    });
+    // Named capture: clang before 16 cannot capture a structured binding.
+    const auto known =
+        std::count_if(rows_.begin(), rows_.end(), [&, &name = name](const auto& item) {
+          return item.second.present && item.second.row.gateway == name;
+        });
     if (static_cast<std::uint64_t>(known) < summary.valves_known) return false;
   }
   return true;

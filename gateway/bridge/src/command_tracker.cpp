@@ -164,7 +164,8 @@ void CommandTracker::expire(SteadyTime now, Outcome& out) {
                    out);
       }
     }
-    std::erase_if(valve.requests, [&](const Tracked& request) {
+    // Named capture: clang before 16 cannot capture a structured binding.
+    std::erase_if(valve.requests, [&, &serial = serial](const Tracked& request) {
       if (now < *request.deadline) return false;
       end_request(serial, request, COMMAND_TIMED_OUT,
                   "no reply within " +

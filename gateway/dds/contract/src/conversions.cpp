@@ -11,6 +11,9 @@ template <class... Fs>
 struct Overloaded : Fs... {
   using Fs::operator()...;
 };
+// Spelled out for clang before 17, which does not deduce an aggregate's template arguments.
+template <class... Fs>
+Overloaded(Fs...) -> Overloaded<Fs...>;
 
 teejet::Direction to_idl(codec::Direction d) {
   return d == codec::Direction::kOpen ? DIRECTION_OPEN : DIRECTION_CLOSE;
