@@ -82,6 +82,16 @@ TEST(GatewayConfig, PollEntriesChangeOnlyWhatTheyName) {
             codec::ToValveMessage{codec::RequestTemperature{0}});
 }
 
+// Found by fuzz_gateway_config: these became durations of 0 ns, so every request timed out at
+// once and every valve was offline as soon as it was seen.
+TEST(GatewayConfig, DurationsShorterThanOneNanosecondAreRefused) {
+  EXPECT_EQ(error_of("gateway: {offline_after_s: 1e-10}"),
+            "test.yaml:1: gateway.offline_after_s: 1e-10 s is shorter than 1 ns");
+  EXPECT_EQ(error_of("commands:\n  reply_timeout_s: 0.0000000001\n"),
+            "test.yaml:2: commands.reply_timeout_s: 0.0000000001 s is shorter than 1 ns");
+  EXPECT_EQ(parse("commands: {move_margin_s: 1e-9}").bridge.move_margin, 1ns);
+}
+
 TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
   EXPECT_EQ(error_of("gateway:\n  nmae: x\n"),
             "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "

@@ -72,6 +72,18 @@ TEST(YamlReader, SecondsArePositiveAndBounded) {
   EXPECT_EQ(refusal("key: 0.5\n", seconds), "");
 }
 
+// Found by fuzz_gateway_config: 1e-10 passed "more than 0" and became a Duration of 0 ns, a
+// reply timeout or offline time of zero.
+TEST(YamlReader, SecondsShorterThanOneNanosecondAreRefused) {
+  const auto seconds = [](const Reader& r, const YAML::Node& n) {
+    (void)r.seconds(n, "key", 3600);
+  };
+  EXPECT_EQ(refusal("key: 1e-10\n", seconds), "test.yaml:1: key: 1e-10 s is shorter than 1 ns");
+  EXPECT_EQ(refusal("key: 4.9e-324\n", seconds),
+            "test.yaml:1: key: 4.9e-324 s is shorter than 1 ns");
+  EXPECT_EQ(refusal("key: 1e-9\n", seconds), "");
+}
+
 TEST(YamlReader, WordsAndFlagsNameWhatIsAllowed) {
   EXPECT_EQ(
       refusal("key: maybe\n", [](const Reader& r, const YAML::Node& n) { (void)r.flag(n, "key"); }),

@@ -136,6 +136,8 @@ double Reader::seconds(const YAML::Node& node, std::string_view key, double max)
          scalar(node, key) + " s is outside the allowed range: more than 0, at most " +
              number_text(max) + " s");
   }
+  // Durations count nanoseconds: anything shorter would silently become a timeout of zero.
+  if (value < 1e-9) fail(node, key, scalar(node, key) + " s is shorter than 1 ns");
   return value;
 }
 

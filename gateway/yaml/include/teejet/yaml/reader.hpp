@@ -45,7 +45,7 @@ class Reader {
   // A whole number in [min, max].
   long long integer(const YAML::Node& node, std::string_view key, long long min,
                     long long max) const;
-  // Seconds greater than 0 and at most `max`.
+  // Seconds greater than 0 and at most `max`; at least 1 ns, the resolution of a Duration.
   double seconds(const YAML::Node& node, std::string_view key, double max) const;
 
  private:
