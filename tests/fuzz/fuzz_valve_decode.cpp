@@ -1,6 +1,6 @@
 // valve-decode's whole input path: text in, one JSON object per line out, as
 // tools/valve-decode/main.cpp does it (split at '\n', a trailing '\r' dropped, blank lines
-// skipped; parse_log_line, codec::decode, then record_json_line or error_json_line).
+// skipped; valve_decode::decode_log_line), checked against the parser and the codec.
 //
 // Input: any bytes, read as the tool reads a file.
 //
@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -24,10 +25,6 @@ namespace {
 using namespace teejet;
 using Json = nlohmann::ordered_json;
 
-bool is_blank(std::string_view line) {
-  return line.find_first_not_of(" \t\r") == std::string_view::npos;
-}
-
 // nlohmann's strict dump refuses exactly the invalid UTF-8 that valve-decode replaces.
 bool valid_utf8(std::string_view text) {
   try {
@@ -39,19 +36,15 @@ bool valid_utf8(std::string_view text) {
 }
 
 void check_line(std::string_view line) {
-  std::string out;
-  bool decoded_ok = false;
+  const std::string out = valve_decode::decode_log_line(line);
+  // The oracle: what the line is, from the parser and the codec directly.
   const auto record = candump::parse_log_line(line);
-  codec::Route route{};
-  if (!record) {
-    out = valve_decode::error_json_line(record.error().reason, line);
-  } else if (const auto decoded = codec::decode(record->frame); !decoded) {
-    out = valve_decode::error_json_line(decoded.error().reason, line);
-  } else {
-    out = valve_decode::record_json_line(*record, *decoded);
-    decoded_ok = true;
-    route = decoded->route;
+  std::optional<codec::DecodedFrame> decoded;
+  if (record) {
+    if (auto frame = codec::decode(record->frame)) decoded = std::move(*frame);
   }
+  const bool decoded_ok = decoded.has_value();
+  const codec::Route route = decoded_ok ? decoded->route : codec::Route{};
 
   FUZZ_CHECK(out.find('\n') == std::string::npos, out);
   const auto json = Json::parse(out, nullptr, /*allow_exceptions=*/false);
@@ -93,7 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::string_view line = text.substr(0, end);
     text.remove_prefix(end == std::string_view::npos ? text.size() : end + 1);
     if (line.ends_with('\r')) line.remove_suffix(1);
-    if (is_blank(line)) continue;
+    if (valve_decode::is_blank_line(line)) continue;
     check_line(line);
   }
   return 0;

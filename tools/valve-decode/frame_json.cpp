@@ -70,4 +70,16 @@ std::string error_json_line(std::string_view reason, std::string_view line) {
   return dump(json);
 }
 
+std::string decode_log_line(std::string_view line) {
+  const auto record = candump::parse_log_line(line);
+  if (!record) return error_json_line(record.error().reason, line);
+  const auto decoded = codec::decode(record->frame);
+  if (!decoded) return error_json_line(decoded.error().reason, line);
+  return record_json_line(*record, *decoded);
+}
+
+bool is_blank_line(std::string_view line) {
+  return line.find_first_not_of(" \t\r") == std::string_view::npos;
+}
+
 }  // namespace teejet::valve_decode

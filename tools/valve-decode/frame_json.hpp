@@ -30,4 +30,11 @@ std::string record_json_line(const candump::LogRecord& record, const codec::Deco
 // {"error":"<reason>","line":"<line>"}, without the newline.
 std::string error_json_line(std::string_view reason, std::string_view line);
 
+// One line of a candump -L log (without its newline) as valve-decode prints it: the record, or
+// the error saying why it could not be read or decoded.
+std::string decode_log_line(std::string_view line);
+
+// Lines of spaces, tabs and carriage returns only: skipped, not reported.
+bool is_blank_line(std::string_view line);
+
 }  // namespace teejet::valve_decode

@@ -1,7 +1,6 @@
 // valve-decode: candump -L lines in, one JSON object per line out.
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -46,20 +45,6 @@ Exit status: 0, also when some lines did not decode; 1 when a FILE or standard i
 not be read (the other FILEs are still decoded) or the output could not be written; 2 for a
 bad command line.)";
 
-std::string decode_line(std::string_view line) {
-  namespace valve_decode = teejet::valve_decode;
-  const auto record = teejet::candump::parse_log_line(line);
-  if (!record) return valve_decode::error_json_line(record.error().reason, line);
-  const auto decoded = teejet::codec::decode(record->frame);
-  if (!decoded) return valve_decode::error_json_line(decoded.error().reason, line);
-  return valve_decode::record_json_line(*record, *decoded);
-}
-
-bool is_blank(std::string_view line) {
-  return std::all_of(line.begin(), line.end(),
-                     [](char c) { return c == ' ' || c == '\t' || c == '\r'; });
-}
-
 // Returns 0 at the end of the input, or the errno of the read that failed.
 int decode_stream(std::istream& input, std::FILE* c_stream, bool flush_each_line) {
   errno = 0;
@@ -67,8 +52,8 @@ int decode_stream(std::istream& input, std::FILE* c_stream, bool flush_each_line
   while (std::getline(input, line)) {
     std::string_view text = line;
     if (text.ends_with('\r')) text.remove_suffix(1);  // CRLF logs from Windows tools
-    if (is_blank(text)) continue;
-    std::cout << decode_line(text) << '\n';
+    if (teejet::valve_decode::is_blank_line(text)) continue;
+    std::cout << teejet::valve_decode::decode_log_line(text) << '\n';
     // Live pipes (`candump -L can0 | valve-decode`) must see each frame at once. cin's tie to
     // cout happens to flush too, but that is easy to lose when tuning stream settings.
     if (flush_each_line) std::cout.flush();
