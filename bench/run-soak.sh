@@ -6,7 +6,7 @@
 #
 #   bench/run-soak.sh [--build-dir DIR] [--minutes M] [--settle-s S]
 #
-# Prints the RESOURCES, RSS, COMMANDS and SUBSCRIBER lines of gateway_latency resources.
+# Prints the RESOURCES, RSS, RSS_SERIES (every sample), COMMANDS and SUBSCRIBER lines of gateway_latency resources.
 # Exit status: 0 when RSS stayed within 1 MiB (lowest to highest) after settling; 1 otherwise.
 set -u
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)

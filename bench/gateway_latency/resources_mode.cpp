@@ -286,6 +286,14 @@ int run_resources(const Options& options) {
         static_cast<unsigned long long>(*lowest), static_cast<unsigned long long>(*highest),
         static_cast<unsigned long long>(rss[i].back()),
         static_cast<unsigned long long>(*highest - *lowest));
+    // The curve, to tell a first-minutes rise that levels off from a steady leak.
+    std::string series;
+    for (const auto kib : rss[i]) {
+      if (!series.empty()) series += ',';
+      series += std::to_string(kib);
+    }
+    std::printf("RSS_SERIES label=%s process=%s every_s=%.1f kib=%s\n", options.label.c_str(),
+                process_name(options.pids[i]).c_str(), options.rss_every_s, series.c_str());
   }
   if (ecu && options.commands_per_second > 0) {
     // The last commands had no time to finish: their statuses may still be on their way.
