@@ -9,6 +9,7 @@
 #include <csignal>
 #include <cstdio>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -381,6 +382,62 @@ TEST_F(GatewayE2E, TwoGatewaysShareADomainEachActingForItsOwnValves) {
   EXPECT_NEAR(moved, 20.0, 1.0);
   const double untouched = position_of(left, 2);
   EXPECT_EQ(untouched, 0.0);
+}
+
+// Issue 10, item 3: commands from a writer that bypasses valvectl. Every one is REJECTED with a
+// reason, nothing reaches the bus, and the valve still takes a good command afterwards.
+TEST_F(GatewayE2E, HostileCommandsAreRejectedWithAReasonAndNeverReachTheBus) {
+  auto gateway_owner = make_gateway(sim_config("gw-hostile", 1));
+  Gateway& gateway = *gateway_owner;
+  start(gateway, 1);
+  can::VirtualBus wire(gateway.simulator()->bus_name(),
+                       {.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
+  ASSERT_TRUE(wire.open());
+  Ecu hostile(test_domain(), "hostile-writer");
+
+  std::vector<std::pair<std::string, ValveCommand>> commands;
+  for (const float degrees :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+        -std::numeric_limits<float>::infinity(), -0.1f, 360.0f, 1e30f, -1e30f}) {
+    commands.emplace_back("target " + std::to_string(degrees), move_to(1, degrees));
+  }
+  auto relative = command(1, COMMAND_DEGREES_FROM_POSITION);
+  relative.degrees(std::numeric_limits<float>::quiet_NaN());
+  commands.emplace_back("relative NaN", relative);
+  for (const auto kind : {COMMAND_MANUAL, COMMAND_TARGET_DEGREES, COMMAND_MILLISECONDS_TO_RUN}) {
+    auto fast = command(1, kind);
+    fast.degrees(10.0f);
+    fast.speed_percent(255);
+    commands.emplace_back("speed 255, kind " + std::to_string(kind), fast);
+  }
+  auto undefined_kind = command(1, static_cast<CommandKind>(42));
+  commands.emplace_back("kind 42", undefined_kind);
+  auto undefined_direction = move_to(1, 10.0f);
+  undefined_direction.direction(static_cast<Direction>(7));
+  commands.emplace_back("direction 7", undefined_direction);
+  auto manual_direction = command(1, COMMAND_MANUAL);
+  manual_direction.direction(static_cast<Direction>(0x7FFFFFFF));
+  commands.emplace_back("manual direction 0x7FFFFFFF", manual_direction);
+  auto undefined_telemetry = command(1, COMMAND_REQUEST);
+  undefined_telemetry.telemetry(static_cast<Telemetry>(99));
+  commands.emplace_back("telemetry 99", undefined_telemetry);
+  auto baud = command(1, COMMAND_SET_BAUD_RATE);
+  baud.bit_rate(125000);
+  commands.emplace_back("set baud rate (not allowed)", baud);
+
+  for (const auto& [what, hostile_command] : commands) {
+    const auto statuses = hostile.follow(hostile.send(hostile_command), 5s);
+    ASSERT_EQ(Ecu::states(statuses), std::vector{COMMAND_REJECTED}) << what;
+    EXPECT_FALSE(statuses[0].reason().to_string().empty()) << what;
+  }
+  std::size_t frames_to_valves = 0;
+  while (wire.receive(0ms)) ++frames_to_valves;
+  EXPECT_EQ(frames_to_valves, 0u) << "a rejected command reached the bus";
+  EXPECT_EQ(gateway.bridge().counters().commands_rejected, commands.size());
+
+  EXPECT_EQ(Ecu::states(hostile.follow(hostile.send(move_to(1, 20.0f)))),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_NEAR(position_of(gateway, 1), 20.0, 1.0);
 }
 
 // Issue 10: the gateway restarted while a valve moves (a service restart with the valves left
