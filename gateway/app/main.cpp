@@ -10,6 +10,7 @@
 
 #include "config.hpp"
 #include "gateway.hpp"
+#include "teejet/command_line.hpp"
 
 namespace {
 
@@ -48,16 +49,6 @@ void survive_failed_writes() {
   std::signal(SIGXFSZ, SIG_IGN);
 }
 
-// CLI11 turns an empty value into 0 or "" without a word: `--domain ""` would join domain 0.
-void refuse_empty_values(CLI::App& app) {
-  const CLI::Validator not_empty(
-      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
-      "NOT_EMPTY");
-  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
-    if (option->get_items_expected_min() > 0) option->check(not_empty);
-  }
-}
-
 std::string default_gateway_name() {
   char host[256] = {};
   ::gethostname(host, sizeof host - 1);
@@ -90,13 +81,9 @@ int main(int argc, char** argv) {
                "do not send Stop to every valve on exit");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-  refuse_empty_values(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    // CLI11's own codes (105, 109, ...) are not part of the interface: help and --version exit
-    // 0, every other parse error 2.
-    return app.exit(error) == 0 ? 0 : kExitUsage;
+  teejet::command_line::refuse_empty_values(app);
+  if (const auto exit_status = teejet::command_line::parse(app, argc, argv, kExitUsage)) {
+    return *exit_status;
   }
   spdlog::set_level(spdlog::level::from_str(log_level));
 

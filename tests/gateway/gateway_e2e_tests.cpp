@@ -80,6 +80,15 @@ double position_of(Gateway& gateway, std::uint32_t serial) {
   });
 }
 
+// The wire as the valves see it: every controller-to-valve frame, in order, from now on.
+std::unique_ptr<can::VirtualBus> watch_wire(Gateway& gateway) {
+  auto wire = std::make_unique<can::VirtualBus>(
+      gateway.simulator()->bus_name(),
+      can::VirtualBusOptions{.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
+  EXPECT_TRUE(wire->open());
+  return wire;
+}
+
 class GatewayE2E : public ::testing::Test {
  protected:
   void start(Gateway& gateway, std::size_t valves) {
@@ -390,9 +399,7 @@ TEST_F(GatewayE2E, HostileCommandsAreRejectedWithAReasonAndNeverReachTheBus) {
   auto gateway_owner = make_gateway(sim_config("gw-hostile", 1));
   Gateway& gateway = *gateway_owner;
   start(gateway, 1);
-  can::VirtualBus wire(gateway.simulator()->bus_name(),
-                       {.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
-  ASSERT_TRUE(wire.open());
+  const auto wire = watch_wire(gateway);
   Ecu hostile(test_domain(), "hostile-writer");
 
   std::vector<std::pair<std::string, ValveCommand>> commands;
@@ -431,7 +438,7 @@ TEST_F(GatewayE2E, HostileCommandsAreRejectedWithAReasonAndNeverReachTheBus) {
     EXPECT_FALSE(statuses[0].reason().to_string().empty()) << what;
   }
   std::size_t frames_to_valves = 0;
-  while (wire.receive(0ms)) ++frames_to_valves;
+  while (wire->receive(0ms)) ++frames_to_valves;
   EXPECT_EQ(frames_to_valves, 0u) << "a rejected command reached the bus";
   EXPECT_EQ(gateway.bridge().counters().commands_rejected, commands.size());
 
@@ -572,10 +579,7 @@ TEST_F(GatewayE2E, ShutdownStopsTakingCommandsBeforeItStopsTheValves) {
   auto gateway_owner = make_gateway(config);
   Gateway& gateway = *gateway_owner;
   start(gateway, 1);
-  // The wire as the valves see it: every controller-to-valve frame, in order.
-  can::VirtualBus wire(gateway.simulator()->bus_name(),
-                       {.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
-  ASSERT_TRUE(wire.open());
+  const auto wire = watch_wire(gateway);
   Ecu ecu(test_domain(), "racing-ecu");
   auto manual = command(1, COMMAND_MANUAL);
   manual.speed_percent(20);
@@ -592,7 +596,7 @@ TEST_F(GatewayE2E, ShutdownStopsTakingCommandsBeforeItStopsTheValves) {
   racer.join();
 
   std::vector<std::uint8_t> run_commands;  // message ids of the run commands the valve got
-  while (const auto frame = wire.receive(0ms)) {
+  while (const auto frame = wire->receive(0ms)) {
     const auto decoded = codec::decode(frame->frame);
     if (!decoded) continue;
     const auto& message = std::get<codec::ToValveMessage>(decoded->message);

@@ -13,6 +13,7 @@
 #include "frame_json.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/command_line.hpp"
 
 namespace {
 
@@ -94,12 +95,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> paths;
   app.add_option("FILE", paths, "candump -L log files; none or \"-\" reads standard input")
       ->type_name("");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    // CLI11's own codes (105, 109, ...) are not part of the interface: help and --version exit
-    // 0, every other parse error 2.
-    return app.exit(error) == 0 ? 0 : kExitUsage;
+  if (const auto exit_status = teejet::command_line::parse(app, argc, argv, kExitUsage)) {
+    return *exit_status;
   }
 
   if (paths.empty()) paths.emplace_back(kStandardInput);

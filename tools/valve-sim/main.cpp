@@ -15,12 +15,14 @@
 #include "setup.hpp"
 #include "teejet/can/open_bus.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/command_line.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace {
 
 namespace sim = teejet::sim;
 namespace codec = teejet::codec;
+namespace command_line = teejet::command_line;
 
 constexpr int kExitUsage = 2;
 constexpr int kExitBus = 1;
@@ -53,17 +55,6 @@ std::shared_ptr<spdlog::logger> make_logger() {
   logger->flush_on(spdlog::level::info);
   spdlog::set_default_logger(logger);
   return logger;
-}
-
-// CLI11 turns an empty value into 0 or "" without a word: `--dps ""` would be 0 degrees per
-// second, `--closed ""` a Closed Degrees of 0.
-void refuse_empty_values(CLI::App& app) {
-  const CLI::Validator not_empty(
-      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
-      "NOT_EMPTY");
-  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
-    if (option->get_items_expected_min() > 0) option->check(not_empty);
-  }
 }
 
 // Adds the next valve: a `hotplug:` entry while there are any, then an automatic serial.
@@ -162,12 +153,9 @@ int main(int argc, char** argv) {
       ->type_name("SERIAL:KIND:VALUE:LIMIT");
   app.add_flag("-v,--verbose", verbose, "log every frame received and sent, decoded");
 
-  refuse_empty_values(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& error) {
-    const int code = app.exit(error);
-    return code == 0 ? 0 : kExitUsage;
+  command_line::refuse_empty_values(app);
+  if (const auto exit_status = command_line::parse(app, argc, argv, kExitUsage)) {
+    return *exit_status;
   }
 
   sim::CommandLine command_line;

@@ -9,6 +9,7 @@
 #include "exit_codes.hpp"
 #include "names.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/command_line.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/dds/participant.hpp"
 
@@ -97,18 +98,6 @@ const CLI::Validator kWholeNumber(
       return "";
     },
     "", "WHOLE_NUMBER");
-
-void refuse_empty_values(CLI::App& app) {
-  const CLI::Validator not_empty(
-      [](std::string& value) { return value.empty() ? std::string("the value is empty") : ""; }, "",
-      "NOT_EMPTY");
-  for (CLI::Option* option : app.get_options([](CLI::Option*) { return true; })) {
-    if (option->get_items_expected_min() > 0) option->check(not_empty);
-  }
-  for (CLI::App* subcommand : app.get_subcommands([](CLI::App*) { return true; })) {
-    refuse_empty_values(*subcommand);
-  }
-}
 
 void add_serial(CLI::App* subcommand, RawArguments& raw, bool required = true) {
   subcommand->add_option("SERIAL", raw.serial, "the valve, TJV123456 or 123456")
@@ -227,7 +216,7 @@ void define(Parser& parser) {
       "--set", raw.bit_rate, "set the bit rate, 250000 or 500000 (the gateway must allow it)");
   parser.bit_rate->transform(kWholeNumber);
   add_wait(parser, parser.baud, "wait for the valve's reply (--request) and print it");
-  refuse_empty_values(app);
+  command_line::refuse_empty_values(app);
 }
 
 std::uint32_t checked_serial(const std::string& text) {

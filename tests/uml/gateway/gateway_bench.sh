@@ -6,41 +6,14 @@
 set -euo pipefail
 build=$1
 repo=$2
-sim="$build/tools/valve-sim/valve-sim"
-gateway="$build/gateway/app/teejet-gateway"
-valvectl="$build/tools/valvectl/valvectl"
-# Fast DDS 2.x reads the first name, later releases the second.
-export FASTRTPS_DEFAULT_PROFILES_FILE="$repo/config/fastdds-loopback.xml"
-export FASTDDS_DEFAULT_PROFILES_FILE="$FASTRTPS_DEFAULT_PROFILES_FILE"
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-failures=0
-# check DESCRIPTION COMMAND...: one line per expectation, counted when it fails.
-check() {
-  local description=$1
-  shift
-  if "$@"; then
-    echo "ok: $description"
-  else
-    echo "FAIL: $description"
-    failures=$((failures + 1))
-  fi
-}
+# shellcheck source=tests/uml/gateway/uml_session.sh
+source "$repo/tests/uml/gateway/uml_session.sh"
 exits_with() {  # exits_with STATUS COMMAND...
   local expected=$1 status=0
   shift
   "$@" >"$work/last.txt" 2>&1 || status=$?
   [ "$status" -eq "$expected" ] || { echo "  exit $status: $(cat "$work/last.txt")"; return 1; }
 }
-# shellcheck source=tools/lib/eventually.sh
-source "$repo/tools/lib/eventually.sh"
 on_wire() { grep -q "$1" "$work/wire.log"; }
 ctl() { "$valvectl" --domain 9 --timeout 20 "$@"; }
 

@@ -9,33 +9,10 @@ set -euo pipefail
 ulimit -c 0
 build=$1
 repo=$2
-sim="$build/tools/valve-sim/valve-sim"
-gateway="$build/gateway/app/teejet-gateway"
-# Fast DDS 2.x reads the first name, later releases the second.
-export FASTRTPS_DEFAULT_PROFILES_FILE="$repo/config/fastdds-loopback.xml"
-export FASTDDS_DEFAULT_PROFILES_FILE="$FASTRTPS_DEFAULT_PROFILES_FILE"
-work=$(mktemp -d)
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$work"
-}
-trap cleanup EXIT
-
-failures=0
-check() {  # check DESCRIPTION COMMAND...
-  local description=$1
-  shift
-  if "$@"; then
-    echo "ok: $description"
-  else
-    echo "FAIL: $description"
-    failures=$((failures + 1))
-  fi
-}
-# shellcheck source=tools/lib/eventually.sh
-source "$repo/tools/lib/eventually.sh"
+# Whatever a case left running is killed outright: no second Stop may muddy the next case.
+end_signal=KILL
+# shellcheck source=tests/uml/gateway/uml_session.sh
+source "$repo/tests/uml/gateway/uml_session.sh"
 
 addresses=(D8 D9 DA)
 wire_lines() { wc -l <"$work/wire.log"; }
