@@ -93,8 +93,18 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1000.0));
   resources
       ->add_option("--rss-every-s", options.rss_every_s,
-                   "sample VmRSS this often in the window; reports first, lowest, highest")
+                   "sample VmRSS, open fds, threads and CPU this often in the window")
       ->check(CLI::Range(0.0, 3600.0));
+  resources
+      ->add_option("--compare-s", options.compare_s,
+                   "compare the first and last this many seconds of the samples (flat?)")
+      ->check(CLI::Range(0.0, 86400.0));
+  resources
+      ->add_option("--drain-s", options.drain_s,
+                   "after the window, wait this long at most for every command's final state")
+      ->check(CLI::Range(0.0, 600.0));
+  resources->add_flag("--check", options.check,
+                      "exit 1 when a command got no final state or the footprint grew");
 
   CLI11_PARSE(app, argc, argv);
   // The CAN layer logs opening and closing at info; the output here is the results only.

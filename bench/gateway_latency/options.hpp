@@ -45,7 +45,10 @@ struct Options {
   std::string interface;
   bool subscribe = false;
   double commands_per_second = 0;  // Target Degrees to valves 1..32 in turn, during the window
-  double rss_every_s = 0;          // sample VmRSS this often during the window (the soak)
+  double rss_every_s = 0;  // sample RSS, fds, threads, CPU this often in the window (the soak)
+  double compare_s = 0;    // compare the first and the last this many seconds of the samples
+  double drain_s = 10;     // after the window, wait this long at most for the last statuses
+  bool check = false;      // exit 1 when a command has no final state or the footprint grew
 };
 
 // Reports what was refused on stderr; returns the exit status for the mode to return.

@@ -1,5 +1,6 @@
 #include "process_stats.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -38,7 +39,7 @@ std::optional<std::uint64_t> cpu_ticks(int pid) {
   return user + system;
 }
 
-std::uint64_t status_kib(int pid, const std::string& name) {
+std::uint64_t status_value(int pid, const std::string& name) {
   std::istringstream status(read_file(proc_path(pid, "status")));
   std::string line;
   while (std::getline(status, line)) {
@@ -46,6 +47,18 @@ std::uint64_t status_kib(int pid, const std::string& name) {
   }
   return 0;
 }
+
+std::uint64_t open_fds(int pid) {
+  std::error_code error;
+  std::uint64_t count = 0;
+  for (std::filesystem::directory_iterator it(proc_path(pid, "fd"), error), end;
+       !error && it != end; it.increment(error)) {
+    ++count;
+  }
+  return count;
+}
+
+std::uint64_t thread_count(int pid) { return status_value(pid, "Threads"); }
 
 std::string process_name(int pid) {
   std::string name = read_file(proc_path(pid, "comm"));

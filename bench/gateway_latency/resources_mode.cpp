@@ -14,9 +14,11 @@
 #include <thread>
 #include <vector>
 
+#include "command_ledger.hpp"
 #include "dds_support.hpp"
 #include "listeners.hpp"
 #include "modes.hpp"
+#include "process_series.hpp"
 #include "process_stats.hpp"
 
 namespace teejet::bench {
@@ -75,22 +77,14 @@ class EcuReadingEverything {
   void move(std::uint32_t serial, float degrees) {
     ValveCommand command;
     command.serial(serial);
-    command.command_id(++commands_sent_);
+    command.command_id(ledger_.next_id());
     command.origin(kOrigin);
     command.kind(COMMAND_TARGET_DEGREES);
     command.degrees(degrees);
     command.speed_percent(100);
     command_writer_->write(&command);
   }
-  struct CommandCounts {
-    std::uint32_t sent = 0, accepted = 0, completed = 0, superseded = 0, other_final = 0;
-  };
-  CommandCounts command_counts() const {
-    std::lock_guard lock(mutex_);
-    CommandCounts counts = status_counts_;
-    counts.sent = commands_sent_;
-    return counts;
-  }
+  const CommandLedger& ledger() const { return ledger_; }
 
  private:
   explicit EcuReadingEverything(std::unique_ptr<dds::Participant> participant)
@@ -137,25 +131,9 @@ class EcuReadingEverything {
   mutable std::mutex mutex_;
   fdds::DataWriter* command_writer_ = nullptr;
   fdds::DataReader* status_reader_ = nullptr;
-  std::uint32_t commands_sent_ = 0;  // the commanding thread only
-  CommandCounts status_counts_;
+  CommandLedger ledger_;
   OnSample<CommandStatus> statuses_{[this](const CommandStatus& status) {
-    if (status.origin().to_string() != kOrigin) return;
-    std::lock_guard lock(mutex_);
-    switch (status.state()) {
-      case COMMAND_ACCEPTED:
-        ++status_counts_.accepted;
-        break;
-      case COMMAND_COMPLETED:
-        ++status_counts_.completed;
-        break;
-      case COMMAND_SUPERSEDED:
-        ++status_counts_.superseded;
-        break;
-      default:
-        ++status_counts_.other_final;
-        break;
-    }
+    if (status.origin().to_string() == kOrigin) ledger_.record(status);
   }};
   std::optional<GatewayCounters> gateway_counters_;
   std::set<std::uint32_t> serials_seen_;
@@ -171,6 +149,75 @@ class EcuReadingEverything {
   std::vector<std::unique_ptr<fdds::DataReaderListener>> counters_;
   std::unique_ptr<dds::Participant> participant_;  // last: destroyed first, before the listeners
 };
+
+void print_series(const Options& options, const std::string& process,
+                  const std::vector<ProcessSample>& series, double ticks_per_second) {
+  const auto [lowest, highest] = std::minmax_element(
+      series.begin(), series.end(),
+      [](const ProcessSample& a, const ProcessSample& b) { return a.rss_kib < b.rss_kib; });
+  std::printf(
+      "RSS label=%s process=%s samples=%zu every_s=%.1f first_kib=%llu lowest_kib=%llu "
+      "highest_kib=%llu last_kib=%llu spread_kib=%llu\n",
+      options.label.c_str(), process.c_str(), series.size(), options.rss_every_s,
+      static_cast<unsigned long long>(series.front().rss_kib),
+      static_cast<unsigned long long>(lowest->rss_kib),
+      static_cast<unsigned long long>(highest->rss_kib),
+      static_cast<unsigned long long>(series.back().rss_kib),
+      static_cast<unsigned long long>(highest->rss_kib - lowest->rss_kib));
+  // The curves, to tell a first-minutes rise that levels off from a steady leak.
+  const auto join = [&](auto value) {
+    std::string text;
+    for (const ProcessSample& sample : series) {
+      if (!text.empty()) text += ',';
+      text += std::to_string(value(sample));
+    }
+    return text;
+  };
+  const char* label = options.label.c_str();
+  std::printf("RSS_SERIES label=%s process=%s every_s=%.1f kib=%s\n", label, process.c_str(),
+              options.rss_every_s, join([](const ProcessSample& s) { return s.rss_kib; }).c_str());
+  std::printf("FD_SERIES label=%s process=%s every_s=%.1f fds=%s\n", label, process.c_str(),
+              options.rss_every_s, join([](const ProcessSample& s) { return s.fds; }).c_str());
+  std::printf("THREAD_SERIES label=%s process=%s every_s=%.1f threads=%s\n", label, process.c_str(),
+              options.rss_every_s, join([](const ProcessSample& s) { return s.threads; }).c_str());
+  std::string cpu;
+  for (const double percent : cpu_percent_per_interval(series, ticks_per_second)) {
+    if (!cpu.empty()) cpu += ',';
+    char value[32];
+    std::snprintf(value, sizeof value, "%.1f", percent);
+    cpu += value;
+  }
+  std::printf("CPU_SERIES label=%s process=%s every_s=%.1f percent=%s\n", label, process.c_str(),
+              options.rss_every_s, cpu.c_str());
+}
+
+void print_comparison(const Options& options, const std::string& process, const SpanComparison& c,
+                      const std::string& grew) {
+  std::printf(
+      "COMPARE label=%s process=%s span_s=%.0f samples=%zu/%zu rss_max_kib=%llu/%llu "
+      "fds_max=%llu/%llu threads_max=%llu/%llu cpu_percent=%.2f/%.2f flat=%s%s%s\n",
+      options.label.c_str(), process.c_str(), options.compare_s, c.first_samples, c.last_samples,
+      static_cast<unsigned long long>(c.first_rss_max),
+      static_cast<unsigned long long>(c.last_rss_max),
+      static_cast<unsigned long long>(c.first_fds_max),
+      static_cast<unsigned long long>(c.last_fds_max),
+      static_cast<unsigned long long>(c.first_threads_max),
+      static_cast<unsigned long long>(c.last_threads_max), c.first_cpu_percent, c.last_cpu_percent,
+      grew.empty() ? "yes" : "no", grew.empty() ? "" : " grew=", grew.c_str());
+}
+
+void print_commands(const Options& options, const LedgerCounts& counts) {
+  std::printf(
+      "COMMANDS label=%s sent=%u accepted=%u completed=%u superseded=%u timed_out=%u "
+      "rejected=%u unaccounted=%u duplicate_finals=%u unknown=%u\n",
+      options.label.c_str(), counts.sent, counts.accepted, counts.completed, counts.superseded,
+      counts.timed_out, counts.rejected, counts.unaccounted, counts.duplicate_finals,
+      counts.unknown);
+  for (const auto& [reason, count] : counts.reasons) {
+    std::printf("REASON label=%s count=%u reason=\"%s\"\n", options.label.c_str(), count,
+                reason.c_str());
+  }
+}
 
 }  // namespace
 
@@ -233,16 +280,19 @@ int run_resources(const Options& options) {
         std::chrono::duration<double>(seconds));
   };
   auto next_command = window_start;
-  auto next_rss = window_start;
-  std::vector<std::vector<std::uint64_t>> rss(options.pids.size());
+  auto next_sample = window_start;
+  std::vector<std::vector<ProcessSample>> series(options.pids.size());
   std::uint32_t moves = 0;
   for (;;) {
     const auto now = std::chrono::steady_clock::now();
-    if (options.rss_every_s > 0 && now >= next_rss) {
+    if (options.rss_every_s > 0 && now >= next_sample) {
+      const double at_s = std::chrono::duration<double>(now - window_start).count();
       for (std::size_t i = 0; i < options.pids.size(); ++i) {
-        rss[i].push_back(status_kib(options.pids[i], "VmRSS"));
+        const int pid = options.pids[i];
+        series[i].push_back({at_s, status_value(pid, "VmRSS"), open_fds(pid), thread_count(pid),
+                             cpu_ticks(pid).value_or(0)});
       }
-      next_rss += period(options.rss_every_s);
+      next_sample += period(options.rss_every_s);
     }
     if (options.commands_per_second > 0 && now >= next_command) {
       // Valves 1..32 in turn, each to the other end of a 10-80 degree stroke every other time.
@@ -252,7 +302,7 @@ int run_resources(const Options& options) {
     }
     if (now >= window_end) break;
     auto wake = window_end;
-    if (options.rss_every_s > 0) wake = std::min(wake, next_rss);
+    if (options.rss_every_s > 0) wake = std::min(wake, next_sample);
     if (options.commands_per_second > 0) wake = std::min(wake, next_command);
     std::this_thread::sleep_until(wake);
   }
@@ -272,35 +322,29 @@ int run_resources(const Options& options) {
         "hwm_kib=%llu\n",
         options.label.c_str(), process_name(start.pid).c_str(), window,
         100.0 * cpu_seconds / window,
-        static_cast<unsigned long long>(status_kib(start.pid, "VmRSS")),
-        static_cast<unsigned long long>(status_kib(start.pid, "VmHWM")));
+        static_cast<unsigned long long>(status_value(start.pid, "VmRSS")),
+        static_cast<unsigned long long>(status_value(start.pid, "VmHWM")));
   }
-  for (std::size_t i = 0; i < rss.size() && options.rss_every_s > 0; ++i) {
-    if (rss[i].empty()) continue;
-    const auto [lowest, highest] = std::minmax_element(rss[i].begin(), rss[i].end());
-    std::printf(
-        "RSS label=%s process=%s samples=%zu every_s=%.1f first_kib=%llu lowest_kib=%llu "
-        "highest_kib=%llu last_kib=%llu spread_kib=%llu\n",
-        options.label.c_str(), process_name(options.pids[i]).c_str(), rss[i].size(),
-        options.rss_every_s, static_cast<unsigned long long>(rss[i].front()),
-        static_cast<unsigned long long>(*lowest), static_cast<unsigned long long>(*highest),
-        static_cast<unsigned long long>(rss[i].back()),
-        static_cast<unsigned long long>(*highest - *lowest));
-    // The curve, to tell a first-minutes rise that levels off from a steady leak.
-    std::string series;
-    for (const auto kib : rss[i]) {
-      if (!series.empty()) series += ',';
-      series += std::to_string(kib);
+  bool failed = false;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    if (series[i].empty()) continue;
+    const std::string name = process_name(options.pids[i]);
+    print_series(options, name, series[i], ticks_per_second);
+    if (options.compare_s > 0) {
+      const SpanComparison comparison =
+          compare_spans(series[i], options.compare_s, ticks_per_second);
+      const std::string grew = not_flat(comparison, FlatBudget{});
+      print_comparison(options, name, comparison, grew);
+      failed = failed || !grew.empty();
     }
-    std::printf("RSS_SERIES label=%s process=%s every_s=%.1f kib=%s\n", options.label.c_str(),
-                process_name(options.pids[i]).c_str(), options.rss_every_s, series.c_str());
   }
   if (ecu && options.commands_per_second > 0) {
-    // The last commands had no time to finish: their statuses may still be on their way.
-    const auto counts = ecu->command_counts();
-    std::printf("COMMANDS label=%s sent=%u accepted=%u completed=%u superseded=%u other_final=%u\n",
-                options.label.c_str(), counts.sent, counts.accepted, counts.completed,
-                counts.superseded, counts.other_final);
+    // The last commands need their time to finish: wait for every final state, with a deadline.
+    wait_until([&] { return ecu->ledger().unaccounted() == 0; },
+               std::chrono::milliseconds(static_cast<long long>(options.drain_s * 1000)));
+    const LedgerCounts counts = ecu->ledger().counts();
+    print_commands(options, counts);
+    failed = failed || counts.unaccounted > 0 || counts.duplicate_finals > 0 || counts.unknown > 0;
   }
   if (frames_before) {
     const auto frames_after = bus_frames(options.interface);
@@ -323,7 +367,7 @@ int run_resources(const Options& options) {
     std::printf("\n");
   }
   std::fflush(stdout);
-  return 0;
+  return options.check && failed ? kExitFailure : 0;
 }
 
 }  // namespace teejet::bench

@@ -1,0 +1,68 @@
+#include "command_ledger.hpp"
+
+#include <cctype>
+
+namespace teejet::bench {
+
+std::uint32_t CommandLedger::next_id() {
+  std::lock_guard lock(mutex_);
+  return ++sent_;
+}
+
+void CommandLedger::record(const CommandStatus& status) {
+  std::lock_guard lock(mutex_);
+  const std::uint32_t id = status.command_id();
+  if (id == 0 || id > sent_) {
+    ++counts_.unknown;
+    return;
+  }
+  const CommandState state = status.state();
+  if (state == COMMAND_ACCEPTED) {
+    ++counts_.accepted;
+    return;
+  }
+  if (!final_state_.emplace(id, state).second) {
+    ++counts_.duplicate_finals;
+    return;
+  }
+  switch (state) {
+    case COMMAND_COMPLETED:
+      ++counts_.completed;
+      break;
+    case COMMAND_SUPERSEDED:
+      ++counts_.superseded;
+      break;
+    case COMMAND_TIMED_OUT:
+      ++counts_.timed_out;
+      break;
+    default:
+      ++counts_.rejected;
+      break;
+  }
+  if (state == COMMAND_TIMED_OUT || state == COMMAND_REJECTED) {
+    ++counts_.reasons[mask_serials(status.reason().to_string())];
+  }
+}
+
+LedgerCounts CommandLedger::counts() const {
+  std::lock_guard lock(mutex_);
+  LedgerCounts counts = counts_;
+  counts.sent = sent_;
+  counts.unaccounted = sent_ - static_cast<std::uint32_t>(final_state_.size());
+  return counts;
+}
+
+std::uint32_t CommandLedger::unaccounted() const { return counts().unaccounted; }
+
+std::string mask_serials(std::string reason) {
+  for (std::size_t at = reason.find("TJV"); at != std::string::npos;
+       at = reason.find("TJV", at + 3)) {
+    for (std::size_t i = at + 3;
+         i < reason.size() && std::isdigit(static_cast<unsigned char>(reason[i])); ++i) {
+      reason[i] = '*';
+    }
+  }
+  return reason;
+}
+
+}  // namespace teejet::bench
