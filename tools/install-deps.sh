@@ -42,6 +42,10 @@ PACKAGES=(
   libfmt-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  # MCAP recordings (tools/mcap): chunk compression and CRC-32
+  libzstd-dev
+  liblz4-dev
+  zlib1g-dev
   # CAN bus: candump/cansend/vcan, python-can for test scripts
   can-utils
   python3
