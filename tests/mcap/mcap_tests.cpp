@@ -169,6 +169,23 @@ TEST(McapReader, AnUnknownCompressionIsAnError) {
       << contents.error().reason;
 }
 
+// Found by the fuzz target mcap_read: a damaged size field made the reader allocate 4 GB.
+TEST(McapReader, AChunkClaimingGigabytesIsRefusedBeforeAnythingIsAllocated) {
+  for (const std::string compression : {"zstd", "lz4"}) {
+    Recorded recorded = record(compression, 100000, 5);
+    auto summary = read_summary(recorded.file);
+    ASSERT_TRUE(summary.ok() && summary->has_value());
+    // The chunk's uncompressed_size: after opcode, length and the two times.
+    const std::size_t field = (*summary)->chunk_indexes.at(0).chunk_start_offset + 1 + 8 + 16;
+    recorded.file[field + 4] = 0xFB;  // 4,211,081,216 + the real size
+    auto contents = read_messages(recorded.file, {});
+    ASSERT_FALSE(contents.ok()) << compression;
+    EXPECT_NE(contents.error().reason.find("more than the 256 MiB a chunk may hold"),
+              std::string::npos)
+        << contents.error().reason;
+  }
+}
+
 TEST(McapWriter, RefusesWhatWouldMakeABadFile) {
   EXPECT_FALSE(Writer::create(std::make_unique<MemorySink>(), {.compression = "gzip"}).ok());
   auto writer = Writer::create(std::make_unique<MemorySink>());
