@@ -17,7 +17,7 @@
 set -u
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/.." && pwd)
-build=$root/build minutes=10 settle_s=30 compare_s=300 churn_s=0 every_s=10 inside=0
+build=$root/build minutes=10 settle_s=30 compare_s=300 churn_s=7 every_s=10 inside=0
 while [ $# -gt 0 ]; do
   case $1 in
   --build-dir) build=$(cd "$2" && pwd) || exit 2; shift 2 ;;

@@ -40,7 +40,7 @@ void CommandLedger::record(const CommandStatus& status) {
       break;
   }
   if (state == COMMAND_TIMED_OUT || state == COMMAND_REJECTED) {
-    ++counts_.reasons[mask_serials(status.reason().to_string())];
+    ++counts_.reasons[mask_numbers(status.reason().to_string())];
   }
 }
 
@@ -54,15 +54,26 @@ LedgerCounts CommandLedger::counts() const {
 
 std::uint32_t CommandLedger::unaccounted() const { return counts().unaccounted; }
 
-std::string mask_serials(std::string reason) {
-  for (std::size_t at = reason.find("TJV"); at != std::string::npos;
-       at = reason.find("TJV", at + 3)) {
-    for (std::size_t i = at + 3;
-         i < reason.size() && std::isdigit(static_cast<unsigned char>(reason[i])); ++i) {
-      reason[i] = '*';
+std::string mask_numbers(const std::string& reason) {
+  const auto digit = [](char c) { return std::isdigit(static_cast<unsigned char>(c)) != 0; };
+  const auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
+  std::string out;
+  for (std::size_t i = 0; i < reason.size();) {
+    if (reason.compare(i, 2, "0x") == 0 && i + 2 < reason.size() && hex(reason[i + 2])) {
+      out += "0x*";
+      for (i += 2; i < reason.size() && hex(reason[i]); ++i) {
+      }
+    } else if (digit(reason[i])) {
+      out += '*';
+      while (i < reason.size() && (digit(reason[i]) || (reason[i] == '.' && i + 1 < reason.size() &&
+                                                        digit(reason[i + 1])))) {
+        ++i;
+      }
+    } else {
+      out += reason[i++];
     }
   }
-  return reason;
+  return out;
 }
 
 }  // namespace teejet::bench

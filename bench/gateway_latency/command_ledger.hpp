@@ -24,8 +24,8 @@ struct LedgerCounts {
   std::uint32_t unaccounted = 0;       // sent, no final state (yet)
   std::uint32_t duplicate_finals = 0;  // a second final state for one command
   std::uint32_t unknown = 0;           // a status for a command id never sent
-  // Why commands were REJECTED or TIMED_OUT, with serials masked ("valve TJV****** is
-  // offline"), so that one reason is one line however many valves gave it.
+  // Why commands were REJECTED or TIMED_OUT, numbers masked ("valve TJV* is offline"), so that
+  // one reason is one line however many valves and positions gave it.
   std::map<std::string, std::uint32_t> reasons;
 };
 
@@ -45,7 +45,8 @@ class CommandLedger {
   std::unordered_map<std::uint32_t, CommandState> final_state_;
 };
 
-// "valve TJV000012 is offline" → "valve TJV****** is offline".
-std::string mask_serials(std::string reason);
+// Every number masked: "TJV000012 took its address 0xD9" → "TJV* took its address 0x*",
+// "position 29.4 did not reach 80.0" → "position * did not reach *".
+std::string mask_numbers(const std::string& reason);
 
 }  // namespace teejet::bench
