@@ -54,7 +54,10 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
       std::make_unique<can::VirtualBus>(bus_name,
                                         can::VirtualBusOptions{can::valve_side_filters()}),
       sim::SimulatorOptions{.valves = simulated_valves(config, **simulated),
-                            .errors = config.sim_errors});
+                            .errors = config.sim_errors,
+                            .churn = {.period = config.sim_churn_period,
+                                      .off_for = config.sim_churn_off_time(),
+                                      .seed = config.sim_churn_seed}});
   backend.bus = can::make_bus("virtual:" + bus_name, can::controller_side_filters());
   return backend;
 }

@@ -1,6 +1,7 @@
 #include "config.hpp"
 
 #include <map>
+#include <sstream>
 
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/participant.hpp"
@@ -15,6 +16,12 @@ using yaml::Reader;
 constexpr double kMaxSeconds = 3600.0;
 // Wider than any real mismatch, and still well short of "anywhere on the dial".
 constexpr double kMaxToleranceDegrees = 45.0;
+
+std::string format_seconds(Duration duration) {
+  std::ostringstream text;
+  text << std::chrono::duration<double>(duration).count();
+  return text.str();
+}
 
 std::string poll_name(const codec::ToValveMessage& request) {
   // "request_position" -> "position": the key of the poll section.
@@ -155,7 +162,9 @@ void read_valves(const Reader& reader, const YAML::Node& v, GatewayConfig& confi
 }
 
 void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& config) {
-  reader.expect_keys(s, "simulator", {"first_serial", "dps", "closed_deg", "opened_deg", "errors"});
+  reader.expect_keys(s, "simulator",
+                     {"first_serial", "dps", "closed_deg", "opened_deg", "errors", "churn_period_s",
+                      "churn_seed"});
   if (s["first_serial"]) {
     const auto serial =
         codec::parse_serial(reader.scalar(s["first_serial"], "simulator.first_serial"));
@@ -177,6 +186,23 @@ void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& co
       const auto error = sim::parse_error_spec(reader.scalar(entry, "simulator.errors"));
       if (!error) reader.fail(entry, "simulator.errors", error.error().reason);
       config.sim_errors.push_back(*error);
+    }
+  }
+  if (s["churn_seed"]) {
+    config.sim_churn_seed = static_cast<std::uint32_t>(
+        reader.integer(s["churn_seed"], "simulator.churn_seed", 0, 4'294'967'295LL));
+  }
+  if (const auto period = s["churn_period_s"]) {
+    const double value = reader.number(period, "simulator.churn_period_s", 0, kMaxSeconds);
+    config.sim_churn_period =
+        std::chrono::duration_cast<Duration>(std::chrono::duration<double>(value));
+    // gateway: is read before simulator:, so offline_after is final here.
+    if (config.sim_churn_period > Duration{0} &&
+        config.sim_churn_period <= config.sim_churn_off_time()) {
+      reader.fail(period, "simulator.churn_period_s",
+                  "must be 0 (off) or longer than a churned valve stays off, "
+                  "gateway.offline_after_s + 1 s = " +
+                      format_seconds(config.sim_churn_off_time()) + " s");
     }
   }
 }

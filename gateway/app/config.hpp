@@ -33,6 +33,12 @@ struct GatewayConfig {
   double sim_closed_degrees = 0.0;
   double sim_opened_degrees = 90.0;
   std::vector<sim::SerialError> sim_errors;  // latched at power-up, as valve-sim --inject-error
+  // Every period one simulated valve, picked at random (the same for the same seed), goes off
+  // and comes back sim_churn_off_time() later, so the bank is re-ranked. 0: off.
+  Duration sim_churn_period{0};
+  std::uint32_t sim_churn_seed = 0;
+  // Long enough for the gateway to see the valve go offline, and a second to spare.
+  Duration sim_churn_off_time() const { return bridge.offline_after + std::chrono::seconds(1); }
   bridge::BridgeConfig bridge;
 };
 

@@ -4,6 +4,7 @@
 
 #include "bus_backend.hpp"
 #include "config.hpp"
+#include "support/eventually.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -168,6 +169,45 @@ TEST(GatewayConfig, SimulatedValvesMayStartWithLatchedErrors) {
   EXPECT_EQ(error_of("simulator: {errors: TJV000002}"),
             "test.yaml:1: simulator.errors: expected a list of errors "
             "(SERIAL:KIND:VALUE:LIMIT[:DIRECTION])");
+}
+
+TEST(GatewayConfig, SimulatorChurnIsOffByDefaultAndItsKeysHaveRanges) {
+  const GatewayConfig defaults;
+  EXPECT_EQ(defaults.sim_churn_period, 0s);
+  EXPECT_EQ(defaults.sim_churn_off_time(), 4s);  // offline_after_s 3 + 1
+  const auto config = parse(
+      "gateway: {offline_after_s: 2}\nsimulator: {churn_period_s: 3.5, churn_seed: 4294967295}");
+  EXPECT_EQ(config.sim_churn_period, 3500ms);
+  EXPECT_EQ(config.sim_churn_seed, 4294967295u);
+  EXPECT_EQ(config.sim_churn_off_time(), 3s);
+  EXPECT_EQ(parse("simulator: {churn_period_s: 0}").sim_churn_period, 0s);
+  EXPECT_EQ(error_of("simulator: {churn_period_s: 4}"),
+            "test.yaml:1: simulator.churn_period_s: must be 0 (off) or longer than a churned "
+            "valve stays off, gateway.offline_after_s + 1 s = 4 s");
+  EXPECT_EQ(error_of("simulator: {churn_period_s: -1}"),
+            "test.yaml:1: simulator.churn_period_s: -1 is outside 0 to 3600");
+  EXPECT_EQ(error_of("simulator: {churn_period_s: .inf}"),
+            "test.yaml:1: simulator.churn_period_s: '.inf' is not a number");
+  EXPECT_EQ(error_of("simulator: {churn_seed: -1}"),
+            "test.yaml:1: simulator.churn_seed: -1 is not a whole number from 0 to 4294967295");
+  EXPECT_EQ(error_of("simulator: {churn_seed: 4294967296}"),
+            "test.yaml:1: simulator.churn_seed: 4294967296 is not a whole number from 0 to "
+            "4294967295");
+}
+
+TEST(GatewayConfig, TheChurnReachesTheEmbeddedSimulator) {
+  auto config = parse("gateway: {offline_after_s: 0.1}\nsimulator: {churn_period_s: 1.2}");
+  config.can = "sim:4";
+  auto backend = make_bus_backend(config);
+  ASSERT_TRUE(backend) << backend.error().reason;
+  ASSERT_TRUE(backend->simulator->start());
+  // The first valve goes off 1.2 s after power-up and is back 1.1 s later.
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] { return backend->simulator->assignments().size() == 3; }, 5s));
+  EXPECT_EQ(backend->simulator->churn_count(), 1u);
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] { return backend->simulator->assignments().size() == 4; }, 5s));
+  backend->simulator->stop();
 }
 
 TEST(GatewayConfig, SimulatedValveCount) {

@@ -251,10 +251,39 @@ void SimulatedValve::request(std::uint8_t request_id, unsigned resend_tenths, St
   }
 }
 
+void SimulatedValve::power_off(SteadyTime now) {
+  halt(now);
+  resends_ = {};
+  errors_ = {};
+  next_i_am_here_.reset();
+  direction_ = codec::Direction::kClose;
+  ran_at_full_speed_ = false;
+  powered_ = false;
+  boot_mode_ = false;
+}
+
+void SimulatedValve::power_on(bool boot_mode) {
+  powered_ = true;
+  boot_mode_ = boot_mode;
+}
+
 std::vector<codec::FromValveMessage> SimulatedValve::handle(const codec::ToValveMessage& message,
                                                             SteadyTime now) {
+  if (!powered_) return {};
   settle(now);
   std::vector<codec::FromValveMessage> replies;
+  if (boot_mode_) {
+    // Boot code identifies itself and keeps the bus settings; the application (motion,
+    // telemetry) does not run. Stop and Clear Errors have nothing to act on.
+    if (const auto* version = std::get_if<codec::RequestVersion>(&message); version != nullptr) {
+      replies.push_back(
+          codec::VersionInfo{config_.application_version, config_.bootloader_version});
+    } else if (const auto* baud = std::get_if<codec::BaudRate>(&message); baud != nullptr) {
+      if (baud->action == codec::BaudAction::kSet) bit_rate_ = baud->bit_rate;
+      replies.push_back(codec::BaudRateReply{bit_rate_});
+    }
+    return replies;
+  }
   std::visit(Overloaded{
                  [&](const codec::Stop&) { halt(now); },
                  [&](const codec::Manual& m) { run_manual(m, now); },
@@ -303,6 +332,7 @@ std::optional<Duration> SimulatedValve::resend_period(std::uint8_t request_id) c
 }
 
 std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
+  if (!powered_) return {};
   settle(now);
   struct Due {
     SteadyTime at;
@@ -317,7 +347,7 @@ std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
   };
   if (next_i_am_here_) {
     fire(*next_i_am_here_, kIAmHerePeriod, [&] {
-      return codec::IAmHere{config_.part_number, config_.serial, false};
+      return codec::IAmHere{config_.part_number, config_.serial, boot_mode_};
     });
   }
   for (auto& latched : errors_) {
@@ -339,6 +369,7 @@ std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
 }
 
 std::optional<SteadyTime> SimulatedValve::next_due() const {
+  if (!powered_) return std::nullopt;
   std::optional<SteadyTime> earliest = next_i_am_here_;
   auto consider = [&](SteadyTime at) {
     if (!earliest || at < *earliest) earliest = at;

@@ -91,6 +91,11 @@ Status Simulator::start() {
   };
   ValveBank trial;
   if (const auto valid = power_up(trial); !valid) return valid;
+  if (options_.churn.period < Duration{0} ||
+      (options_.churn.period > Duration{0} && options_.churn.off_for <= Duration{0})) {
+    return Error{ErrorCode::kInvalidValue,
+                 "churn: the period must be 0 (off) or positive, with a positive off time"};
+  }
   if (const auto opened = bus_->open(); !opened) {
     return Error{opened.error().code, "cannot open " + bus_->name() + ": " + opened.error().reason,
                  opened.error().os_error};
@@ -99,6 +104,12 @@ Status Simulator::start() {
     std::lock_guard lock(mutex_);
     bank_ = ValveBank{};
     if (const auto powered = power_up(bank_); !powered) return powered;  // as the trial did
+    churn_random_.seed(options_.churn.seed);
+    churned_.reset();
+    next_churn_.reset();
+    if (options_.churn.period > Duration{0}) {
+      next_churn_ = options_.clock->steady() + options_.churn.period;
+    }
   }
   for (const auto& [serial, address] : assignments()) {
     logger_->info("{} at address {} on {}", codec::format_serial(serial), address_text(address),
@@ -126,7 +137,12 @@ Status Simulator::add_valve(const ValveConfig& config, std::vector<AddressChange
       return added;
     }
   }
-  for (const auto& change : *out) {
+  log_changes(*out);
+  return {};
+}
+
+void Simulator::log_changes(const std::vector<AddressChange>& changes) const {
+  for (const auto& change : changes) {
     if (change.from) {
       logger_->info("{} moves from {} to {}", codec::format_serial(change.serial),
                     address_text(*change.from), address_text(change.to));
@@ -134,7 +150,82 @@ Status Simulator::add_valve(const ValveConfig& config, std::vector<AddressChange
       logger_->info("{} added at {}", codec::format_serial(change.serial), address_text(change.to));
     }
   }
+}
+
+Status Simulator::power_off(std::uint32_t serial, std::vector<AddressChange>* changes) {
+  std::vector<AddressChange> local;
+  auto* out = changes ? changes : &local;
+  {
+    std::lock_guard lock(mutex_);
+    if (const auto off = bank_.power_off(serial, options_.clock->steady(), out); !off) return off;
+  }
+  logger_->info("{} powered off", codec::format_serial(serial));
+  log_changes(*out);
   return {};
+}
+
+Status Simulator::power_on(std::uint32_t serial, bool boot_mode,
+                           std::vector<AddressChange>* changes) {
+  std::vector<AddressChange> local;
+  auto* out = changes ? changes : &local;
+  {
+    std::lock_guard lock(mutex_);
+    if (const auto on = bank_.power_on(serial, boot_mode, options_.clock->steady(), out); !on) {
+      return on;
+    }
+  }
+  logger_->info("{} powered on{}", codec::format_serial(serial),
+                boot_mode ? ", running boot code" : "");
+  log_changes(*out);
+  return {};
+}
+
+Status Simulator::force_address(std::uint32_t serial, std::uint8_t address) {
+  {
+    std::lock_guard lock(mutex_);
+    if (const auto forced = bank_.force_address(serial, address, options_.clock->steady());
+        !forced) {
+      return forced;
+    }
+  }
+  logger_->warn("{} forced to claim {}", codec::format_serial(serial), address_text(address));
+  return {};
+}
+
+void Simulator::churn(SteadyTime now) {
+  std::vector<AddressChange> changes;
+  if (churned_ && now >= churned_back_at_) {
+    const auto serial = *churned_;
+    churned_.reset();
+    // A test may have powered it on itself meanwhile: nothing to do then.
+    if (bank_.power_on(serial, false, now, &changes)) {
+      logger_->info("churn: {} powered on", codec::format_serial(serial));
+      log_changes(changes);
+    }
+  }
+  if (!next_churn_ || now < *next_churn_) return;
+  const auto period = options_.churn.period;
+  *next_churn_ += period * ((now - *next_churn_) / period + 1);
+  if (churned_) return;  // still off from the last period
+  const auto on = bank_.assignments();
+  if (on.empty()) return;
+  // Not std::uniform_int_distribution: its results differ between standard libraries, and the
+  // same seed must pick the same valves everywhere.
+  const auto serial = on[churn_random_() % on.size()].serial;
+  if (!bank_.power_off(serial, now, &changes)) return;
+  churned_ = serial;
+  churned_back_at_ = now + options_.churn.off_for;
+  ++churn_count_;
+  logger_->info(
+      "churn: {} powered off for {} ms", codec::format_serial(serial),
+      std::chrono::duration_cast<std::chrono::milliseconds>(options_.churn.off_for).count());
+  log_changes(changes);
+}
+
+std::optional<SteadyTime> Simulator::next_churn_event() const {
+  std::optional<SteadyTime> due = next_churn_;
+  if (churned_ && (!due || churned_back_at_ < *due)) due = churned_back_at_;
+  return due;
 }
 
 Status Simulator::inject_error(std::uint32_t serial, const InjectedError& error) {
@@ -178,6 +269,9 @@ std::chrono::milliseconds Simulator::wait_budget() const {
   {
     std::lock_guard lock(mutex_);
     due = bank_.next_due();
+    if (const auto churn_due = next_churn_event(); churn_due && (!due || *churn_due < *due)) {
+      due = churn_due;
+    }
   }
   return receive_timeout(due, options_.clock->steady(), options_.max_wait, options_.timer_tick);
 }
@@ -240,6 +334,7 @@ void Simulator::run(const std::stop_token& stop) {
     if (received) on_frame(*received, out);
     {
       std::lock_guard lock(mutex_);
+      churn(options_.clock->steady());
       auto due = bank_.advance(options_.clock->steady());
       for (auto& message : due) out.push_back(std::move(message));
     }

@@ -31,13 +31,35 @@ Status ValveBank::power_up(const std::vector<ValveConfig>& configs, SteadyTime n
                    "serial " + codec::format_serial(config.serial) + " is given twice"};
     }
   }
-  for (const auto& config : configs) valves_.push_back(std::make_unique<SimulatedValve>(config));
-  std::sort(valves_.begin(), valves_.end(),
-            [](const auto& a, const auto& b) { return a->serial() < b->serial(); });
-  for (std::size_t rank = 0; rank < valves_.size(); ++rank) {
-    valves_[rank]->schedule_i_am_here(now + static_cast<Duration::rep>(rank) * kIAmHereStagger);
+  for (const auto& config : configs) {
+    valves_.push_back(Slot{std::make_unique<SimulatedValve>(config), std::nullopt});
   }
+  std::sort(valves_.begin(), valves_.end(),
+            [](const Slot& a, const Slot& b) { return a.valve->serial() < b.valve->serial(); });
+  rerank(now, nullptr);
   return {};
+}
+
+void ValveBank::rerank(SteadyTime now, std::vector<AddressChange>* changes) {
+  if (changes) changes->clear();
+  std::size_t rank = 0;
+  for (auto& slot : valves_) {
+    if (!slot.valve->powered()) continue;
+    const auto address = address_of_rank(rank);
+    if (slot.address != address) {
+      slot.valve->schedule_i_am_here(now + static_cast<Duration::rep>(rank) * kIAmHereStagger);
+      if (changes) changes->push_back({slot.valve->serial(), slot.address, address});
+      slot.address = address;
+    }
+    ++rank;
+  }
+}
+
+ValveBank::Slot* ValveBank::slot_of(std::uint32_t serial) {
+  for (auto& slot : valves_) {
+    if (slot.valve->serial() == serial) return &slot;
+  }
+  return nullptr;
 }
 
 Status ValveBank::add_valve(const ValveConfig& config, SteadyTime now,
@@ -53,46 +75,81 @@ Status ValveBank::add_valve(const ValveConfig& config, SteadyTime now,
                                                ": " + too_many(valves_.size() + 1)};
   }
   const auto at = std::find_if(valves_.begin(), valves_.end(),
-                               [&](const auto& v) { return v->serial() > config.serial; });
-  const auto rank_of_new = static_cast<std::size_t>(at - valves_.begin());
-  valves_.insert(at, std::make_unique<SimulatedValve>(config));
-  if (changes) changes->clear();
-  // The new valve and every valve above it in rank take a new address and announce it.
-  for (std::size_t rank = rank_of_new; rank < valves_.size(); ++rank) {
-    auto& valve = *valves_[rank];
-    valve.schedule_i_am_here(now + static_cast<Duration::rep>(rank) * kIAmHereStagger);
-    if (changes) {
-      std::optional<std::uint8_t> from;
-      if (rank != rank_of_new) from = address_of_rank(rank - 1);
-      changes->push_back({valve.serial(), from, address_of_rank(rank)});
-    }
+                               [&](const Slot& s) { return s.valve->serial() > config.serial; });
+  valves_.insert(at, Slot{std::make_unique<SimulatedValve>(config), std::nullopt});
+  rerank(now, changes);
+  return {};
+}
+
+Status ValveBank::power_off(std::uint32_t serial, SteadyTime now,
+                            std::vector<AddressChange>* changes) {
+  auto* slot = slot_of(serial);
+  if (slot == nullptr) {
+    return Error{ErrorCode::kInvalidValue, "no valve with serial " + codec::format_serial(serial)};
   }
+  if (!slot->valve->powered()) {
+    return Error{ErrorCode::kInvalidValue, codec::format_serial(serial) + " is already off"};
+  }
+  slot->valve->power_off(now);
+  slot->address.reset();
+  rerank(now, changes);
+  return {};
+}
+
+Status ValveBank::power_on(std::uint32_t serial, bool boot_mode, SteadyTime now,
+                           std::vector<AddressChange>* changes) {
+  auto* slot = slot_of(serial);
+  if (slot == nullptr) {
+    return Error{ErrorCode::kInvalidValue, "no valve with serial " + codec::format_serial(serial)};
+  }
+  if (slot->valve->powered()) {
+    return Error{ErrorCode::kInvalidValue, codec::format_serial(serial) + " is already on"};
+  }
+  slot->valve->power_on(boot_mode);
+  rerank(now, changes);
+  return {};
+}
+
+Status ValveBank::force_address(std::uint32_t serial, std::uint8_t address, SteadyTime now) {
+  auto* slot = slot_of(serial);
+  if (slot == nullptr) {
+    return Error{ErrorCode::kInvalidValue, "no valve with serial " + codec::format_serial(serial)};
+  }
+  if (!slot->valve->powered()) {
+    return Error{ErrorCode::kInvalidValue, codec::format_serial(serial) + " is off"};
+  }
+  if (!codec::is_valve_address(address)) {
+    return Error{ErrorCode::kInvalidValue, "not a valve address (0xD8-0xF7)"};
+  }
+  slot->address = address;
+  slot->valve->schedule_i_am_here(now);
   return {};
 }
 
 std::vector<Outgoing> ValveBank::handle(std::uint8_t address, const codec::ToValveMessage& message,
                                         SteadyTime now) {
   std::vector<Outgoing> out;
-  if (auto* valve = valve_at(address)) {
-    for (auto& reply : valve->handle(message, now)) out.push_back({address, std::move(reply)});
+  for (auto& slot : valves_) {
+    if (slot.address != address) continue;
+    for (auto& reply : slot.valve->handle(message, now)) out.push_back({address, std::move(reply)});
   }
   return out;
 }
 
 std::vector<Outgoing> ValveBank::advance(SteadyTime now) {
   std::vector<Outgoing> out;
-  for (std::size_t rank = 0; rank < valves_.size(); ++rank) {
-    for (auto& message : valves_[rank]->advance(now)) {
-      out.push_back({address_of_rank(rank), std::move(message)});
-    }
+  for (auto& slot : valves_) {
+    if (!slot.address) continue;
+    for (auto& message : slot.valve->advance(now))
+      out.push_back({*slot.address, std::move(message)});
   }
   return out;
 }
 
 std::optional<SteadyTime> ValveBank::next_due() const {
   std::optional<SteadyTime> earliest;
-  for (const auto& valve : valves_) {
-    const auto due = valve->next_due();
+  for (const auto& slot : valves_) {
+    const auto due = slot.valve->next_due();
     if (due && (!earliest || *due < *earliest)) earliest = due;
   }
   return earliest;
@@ -100,34 +157,36 @@ std::optional<SteadyTime> ValveBank::next_due() const {
 
 Status ValveBank::inject_error(std::uint32_t serial, const InjectedError& error, SteadyTime now) {
   if (const auto valid = validate(error); !valid) return valid;
-  for (auto& valve : valves_) {
-    if (valve->serial() == serial) {
-      valve->inject_error(error, now);
-      return {};
-    }
+  auto* slot = slot_of(serial);
+  if (slot == nullptr) {
+    return Error{ErrorCode::kInvalidValue, "no valve with serial " + codec::format_serial(serial)};
   }
-  return Error{ErrorCode::kInvalidValue, "no valve with serial " + codec::format_serial(serial)};
+  slot->valve->inject_error(error, now);
+  return {};
 }
 
 std::vector<Assignment> ValveBank::assignments() const {
   std::vector<Assignment> result;
-  for (std::size_t rank = 0; rank < valves_.size(); ++rank) {
-    result.push_back({valves_[rank]->serial(), address_of_rank(rank)});
+  for (const auto& slot : valves_) {
+    if (slot.address) result.push_back({slot.valve->serial(), *slot.address});
   }
+  std::stable_sort(result.begin(), result.end(),
+                   [](const Assignment& a, const Assignment& b) { return a.address < b.address; });
   return result;
 }
 
 std::optional<std::uint8_t> ValveBank::address_of(std::uint32_t serial) const {
-  for (std::size_t rank = 0; rank < valves_.size(); ++rank) {
-    if (valves_[rank]->serial() == serial) return address_of_rank(rank);
+  for (const auto& slot : valves_) {
+    if (slot.valve->serial() == serial) return slot.address;
   }
   return std::nullopt;
 }
 
 SimulatedValve* ValveBank::valve_at(std::uint8_t address) {
-  if (!codec::is_valve_address(address)) return nullptr;
-  const auto rank = static_cast<std::size_t>(address - codec::kFirstValveAddress);
-  return rank < valves_.size() ? valves_[rank].get() : nullptr;
+  for (auto& slot : valves_) {
+    if (slot.address == address) return slot.valve.get();
+  }
+  return nullptr;
 }
 
 const SimulatedValve* ValveBank::valve_at(std::uint8_t address) const {
@@ -135,8 +194,8 @@ const SimulatedValve* ValveBank::valve_at(std::uint8_t address) const {
 }
 
 const SimulatedValve* ValveBank::valve_with_serial(std::uint32_t serial) const {
-  for (const auto& valve : valves_) {
-    if (valve->serial() == serial) return valve.get();
+  for (const auto& slot : valves_) {
+    if (slot.valve->serial() == serial) return slot.valve.get();
   }
   return nullptr;
 }

@@ -46,6 +46,20 @@ class SimulatedValve {
   // validate(error) fails.
   void inject_error(const InjectedError& error, SteadyTime now);
 
+  // Power gone at `now`: the motor stops where the valve got to (run time counted up to then),
+  // and until power_on() the valve sends nothing and acts on nothing. What lives in RAM is lost:
+  // automatic resends, latched errors, the I'm Here schedule, the direction of the last run
+  // command, the "ran at 100 %" mark. What the firmware keeps in non-volatile memory stays: run
+  // time, cycle counts, the stored bit rate. The position is where the shaft physically is.
+  void power_off(SteadyTime now);
+  // Power back: the valve runs its application code, or with `boot_mode` its boot code, which
+  // announces itself (I'm Here byte 7 = 1) and answers Request Version and Baud Rate but does not
+  // run the application: motion commands and telemetry requests are ignored (nothing moves,
+  // nothing is counted, nothing is answered). The bank schedules its I'm Here.
+  void power_on(bool boot_mode = false);
+  bool powered() const { return powered_; }
+  bool boot_mode() const { return boot_mode_; }
+
   // ---- Observation (for tests, logs and embedders); `now` must not precede earlier calls --
   const ValveConfig& config() const { return config_; }
   std::uint32_t serial() const { return config_.serial; }
@@ -121,6 +135,8 @@ class SimulatedValve {
   std::optional<SteadyTime> next_i_am_here_;
   std::array<std::optional<Periodic>, kTelemetryRequests> resends_{};
   std::array<std::optional<Latched>, kErrorKindCount> errors_{};
+  bool powered_ = true;
+  bool boot_mode_ = false;
 };
 
 }  // namespace teejet::sim

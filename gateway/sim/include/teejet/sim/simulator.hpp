@@ -10,6 +10,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <stop_token>
 #include <string>
 #include <thread>
@@ -24,6 +25,17 @@ class logger;
 }
 
 namespace teejet::sim {
+
+// Valves going off and coming back at random, for soak runs: every `period` one valve that is on,
+// picked by a generator seeded with `seed` (the same seed picks the same valves), is powered off
+// and powered on again `off_for` later, in application mode. Both re-rank the bank, so other
+// valves are readdressed. At most one valve is off this way at a time: a period that ends while
+// it is still off is skipped. period 0: off.
+struct ChurnOptions {
+  Duration period{0};
+  Duration off_for{0};
+  std::uint64_t seed = 0;
+};
 
 struct SimulatorOptions {
   std::vector<ValveConfig> valves;  // powered up by start()
@@ -43,6 +55,7 @@ struct SimulatorOptions {
   // any poll rate; with 10 ms, 100 at most. Replies to requests are never delayed. 0: no tick.
   std::chrono::milliseconds timer_tick{10};
   codec::EncodeOptions encode_options{};
+  ChurnOptions churn{};
 };
 
 // How long the simulator thread waits for a frame when the next event is due at `next_due`
@@ -73,6 +86,13 @@ class Simulator {
   // simulator thread within max_wait.
   Status add_valve(const ValveConfig& config, std::vector<AddressChange>* changes = nullptr);
   Status inject_error(std::uint32_t serial, const InjectedError& error);
+  // ValveBank::power_off, power_on and force_address at the current clock time, logged.
+  Status power_off(std::uint32_t serial, std::vector<AddressChange>* changes = nullptr);
+  Status power_on(std::uint32_t serial, bool boot_mode = false,
+                  std::vector<AddressChange>* changes = nullptr);
+  Status force_address(std::uint32_t serial, std::uint8_t address);
+  // How many valves the churn has powered off so far.
+  std::uint64_t churn_count() const { return churn_count_.load(); }
 
   std::vector<Assignment> assignments() const;
   // Calls fn(const ValveBank&) with the bank locked: inspection for tests and embedders.
@@ -97,6 +117,10 @@ class Simulator {
   // Encodes and sends a burst as one batch: the receiver wakes once for it.
   void send(const std::vector<Outgoing>& outgoing);
   void log_frame(const char* way, Timestamp at, const codec::CanFrame& frame) const;
+  void log_changes(const std::vector<AddressChange>& changes) const;
+  // Powers the churn's valve off or back on when due; mutex_ held.
+  void churn(SteadyTime now);
+  std::optional<SteadyTime> next_churn_event() const;  // mutex_ held
 
   std::unique_ptr<can::Bus> bus_;
   SimulatorOptions options_;
@@ -104,6 +128,13 @@ class Simulator {
 
   mutable std::mutex mutex_;  // guards bank_
   ValveBank bank_;
+
+  // The churn, guarded by mutex_.
+  std::mt19937_64 churn_random_;
+  std::optional<SteadyTime> next_churn_;  // the next valve goes off then
+  std::optional<std::uint32_t> churned_;  // the valve it holds off
+  SteadyTime churned_back_at_{};
+  std::atomic<std::uint64_t> churn_count_{0};
 
   std::jthread thread_;
   std::atomic<std::uint64_t> frames_handled_{0};

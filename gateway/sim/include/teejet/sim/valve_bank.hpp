@@ -3,9 +3,10 @@
 // A bank of simulated valves sharing one bus: address arbitration, routing by address and
 // staggered I'm Here. Pure logic like SimulatedValve; the Simulator runs it on a bus.
 //
-// Arbitration (docs/valve-sim.md): valves are ranked by serial, lowest first, and the valve of
-// rank r has address 0xD8 + r. Adding a valve re-ranks the bank, so every valve with a higher
-// serial than the new one moves up one address, as the sheet warns can happen.
+// Arbitration (docs/valve-sim.md): the valves that are on are ranked by serial, lowest first,
+// and the valve of rank r has address 0xD8 + r. Adding a valve, or one going off or coming back,
+// re-ranks the bank, so the valves with a higher serial move, as the sheet warns can happen.
+// force_address() breaks the rule on purpose: a valve claiming an address another one holds.
 
 #include <chrono>
 #include <cstdint>
@@ -55,7 +56,23 @@ class ValveBank {
   Status add_valve(const ValveConfig& config, SteadyTime now,
                    std::vector<AddressChange>* changes = nullptr);
 
-  // Routes a controller message to the valve at `address`; nothing when none is there.
+  // Power gone: the valve goes silent (SimulatedValve::power_off) and leaves the ranking, so
+  // every valve above it moves down one address and announces there. Refused for an unknown
+  // serial or a valve already off.
+  Status power_off(std::uint32_t serial, SteadyTime now,
+                   std::vector<AddressChange>* changes = nullptr);
+  // Power back: the valve is re-ranked like an added one (its change has no `from`), valves
+  // above it move up, and it announces itself, with the boot code flag when `boot_mode`.
+  // Refused for an unknown serial or a valve already on.
+  Status power_on(std::uint32_t serial, bool boot_mode, SteadyTime now,
+                  std::vector<AddressChange>* changes = nullptr);
+  // Faulty firmware or a miswired bench: the valve claims `address` whoever holds it, and
+  // announces itself there at once and once a second after. Both valves at a contested address
+  // act on what is sent to it. Lasts until the valve goes off or the bank is re-ranked.
+  Status force_address(std::uint32_t serial, std::uint8_t address, SteadyTime now);
+
+  // Routes a controller message to the valves at `address` (normally one); nothing when none
+  // is there.
   std::vector<Outgoing> handle(std::uint8_t address, const codec::ToValveMessage& message,
                                SteadyTime now);
   std::vector<Outgoing> advance(SteadyTime now);
@@ -63,16 +80,25 @@ class ValveBank {
 
   Status inject_error(std::uint32_t serial, const InjectedError& error, SteadyTime now);
 
-  std::size_t size() const { return valves_.size(); }
-  std::vector<Assignment> assignments() const;  // by address
-  std::optional<std::uint8_t> address_of(std::uint32_t serial) const;
+  std::size_t size() const { return valves_.size(); }  // on and off
+  std::vector<Assignment> assignments() const;         // the valves that are on, by address
+  std::optional<std::uint8_t> address_of(std::uint32_t serial) const;  // nullopt: off or unknown
+  // The valve at `address` (the lowest serial when it is contested).
   SimulatedValve* valve_at(std::uint8_t address);
   const SimulatedValve* valve_at(std::uint8_t address) const;
   const SimulatedValve* valve_with_serial(std::uint32_t serial) const;
 
  private:
+  struct Slot {
+    std::unique_ptr<SimulatedValve> valve;
+    std::optional<std::uint8_t> address;  // nullopt while off
+  };
   static std::uint8_t address_of_rank(std::size_t rank);
-  std::vector<std::unique_ptr<SimulatedValve>> valves_;  // sorted by serial: index = rank
+  Slot* slot_of(std::uint32_t serial);
+  // Gives the valves that are on the addresses of their ranks (ending any forced address); each
+  // whose address changed announces at now + rank * kIAmHereStagger.
+  void rerank(SteadyTime now, std::vector<AddressChange>* changes);
+  std::vector<Slot> valves_;  // sorted by serial
 };
 
 // The serial the command-line tool gives a valve added at run time (SIGUSR1): one below the
