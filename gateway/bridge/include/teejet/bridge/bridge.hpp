@@ -69,7 +69,8 @@ struct BridgeCounters {
   std::uint64_t decode_errors = 0;  // frames of this PGN that did not decode
   std::uint64_t unattributed = 0;   // telemetry from an address no online valve announced
   std::uint64_t commands_rejected = 0;
-  std::uint64_t commands_ignored = 0;  // for serials this gateway has never seen
+  std::uint64_t commands_ignored = 0;   // for serials this gateway has never seen
+  std::uint64_t address_conflicts = 0;  // two valves found announcing at one address
   std::string last_decode_error;
 };
 
@@ -120,10 +121,12 @@ class Bridge {
   void handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                         Timestamp received);
   void arm_polling(const directory::ValveRecord& valve);
+  void conflict_cleared(const directory::Change& change);
   void publish_presence(const directory::ValveRecord& valve);
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
+
   // Publishes what the tracker ended and sends what it asked to restore.
   void settle(const Outcome& outcome);
   // Sends Stop to an online valve and ends its running command; false if not sent.
