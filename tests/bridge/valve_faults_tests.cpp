@@ -247,6 +247,22 @@ TEST_F(ValveFaults, AValveWhoseAddressIsTakenWhileSilentEndsItsCommandWithinTheO
   EXPECT_EQ(bridge->counters().address_conflicts, 0u);  // a restart is no conflict
 }
 
+// (a) A power glitch: off and on again at once, at an address nobody took. Its I'm Here looks
+// like any other; only its telemetry stops (the automatic resends lived in RAM).
+TEST_F(ValveFaults, AValveThatRestartsUnnoticedIsPolledAgainOnceItsTelemetryStops) {
+  start(3);
+  const auto glitch_at = Clock::now();
+  ASSERT_TRUE(simulator->power_off(3));
+  ASSERT_TRUE(simulator->power_on(3));
+  ASSERT_TRUE(eventually([&] { return sink.positions_since(3, glitch_at) >= 3; }, kDeadline));
+  const auto back_after = Clock::now() - glitch_at;
+  std::printf("[ measured ] power glitch: positions flowing again %lld ms after the restart\n",
+              ms(back_after));
+  EXPECT_LE(back_after, 3500ms);  // two I'm Here periods of silence, and the next I'm Here
+  EXPECT_TRUE(online(3));
+  EXPECT_EQ(run_command(target(3, 1, 30.0F)).status.state(), COMMAND_COMPLETED);
+}
+
 // (b)
 TEST_F(ValveFaults, TwoValvesAtOneAddressAreRejectedNamingBothAndTheirTelemetryIsDropped) {
   start(4);

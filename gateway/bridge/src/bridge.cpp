@@ -55,6 +55,27 @@ std::string boot_code_reason(std::uint32_t serial) {
   return "valve " + codec::format_serial(serial) + " is running boot code";
 }
 
+// How long a polled valve may send no telemetry before the gateway takes it for a valve that
+// restarted (its automatic resends live in RAM) and polls it again: two I'm Here periods, or two
+// of the shortest resend period of the schedule if that is longer; nullopt when nothing in the
+// schedule is resent.
+std::optional<Duration> quiet_limit(const std::vector<codec::ToValveMessage>& poll) {
+  std::optional<Duration> shortest;
+  for (const auto& request : poll) {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (requires { m.resend_tenths; }) {
+            if (m.resend_tenths == 0) return;
+            const Duration period = std::chrono::milliseconds(100) * m.resend_tenths;
+            if (!shortest || period < *shortest) shortest = period;
+          }
+        },
+        request);
+  }
+  if (!shortest) return std::nullopt;
+  return std::max(Duration{2 * kStatusPeriod}, 2 * *shortest);
+}
+
 }  // namespace
 
 std::vector<codec::ToValveMessage> default_poll_schedule() {
@@ -71,6 +92,7 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       sink_(sink),
       clock_(std::move(clock)),
       directory_(config_.offline_after),
+      quiet_limit_(quiet_limit(config_.poll)),
       tracker_(std::make_unique<CommandTracker>(config_)),
       next_status_(clock_->steady() + kStatusPeriod) {}
 
@@ -162,6 +184,13 @@ void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& messag
   displaced_by_.erase(message.serial);
   if (next_deadline_) next_deadline_ = std::min(*next_deadline_, now + config_.offline_after);
   const auto valve = *directory_.find(message.serial);
+  if (!rearm && polling_went_quiet(valve, now)) {
+    // A power glitch short of offline_after at an address nobody took: the I'm Here looks like
+    // any other, only the telemetry has stopped.
+    spdlog::info("{} sends no telemetry although polled (restarted?): polling it again",
+                 codec::format_serial(valve.serial));
+    rearm = true;
+  }
   if (rearm) arm_polling(valve);
   publish_presence(valve);
   settle(outcome);
@@ -179,6 +208,7 @@ void Bridge::conflict_cleared(const directory::Change& change) {
 
 void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                               Timestamp received) {
+  heard_at_[serial] = clock_->steady();
   Outcome outcome;
   tracker_->heard(serial, message, outcome);
   settle(outcome);
@@ -192,6 +222,19 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
 
 void Bridge::arm_polling(const directory::ValveRecord& valve) {
   for (const auto& request : config_.poll) (void)send(valve.address, request);
+  polled_at_[valve.serial] = clock_->steady();
+}
+
+bool Bridge::polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const {
+  if (!quiet_limit_ || !valve.online || valve.boot_mode || directory_.contest_of(valve.serial)) {
+    return false;
+  }
+  SteadyTime last = SteadyTime::min();
+  if (const auto it = polled_at_.find(valve.serial); it != polled_at_.end()) last = it->second;
+  if (const auto it = heard_at_.find(valve.serial); it != heard_at_.end()) {
+    last = std::max(last, it->second);
+  }
+  return last != SteadyTime::min() && now - last > *quiet_limit_;
 }
 
 void Bridge::publish_presence(const directory::ValveRecord& valve) {

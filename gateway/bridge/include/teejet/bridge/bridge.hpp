@@ -122,6 +122,8 @@ class Bridge {
                         Timestamp received);
   void arm_polling(const directory::ValveRecord& valve);
   void conflict_cleared(const directory::Change& change);
+  // Polled, online, and no telemetry for longer than quiet_limit_: its resends are gone.
+  bool polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const;
   void publish_presence(const directory::ValveRecord& valve);
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
@@ -142,10 +144,15 @@ class Bridge {
 
   mutable std::mutex mutex_;
   directory::ValveDirectory directory_;
+  const std::optional<Duration> quiet_limit_;
   std::unique_ptr<CommandTracker> tracker_;
   std::map<std::uint32_t, std::set<ErrorKind>> latched_errors_;
   // Valves displaced from their address, and by whom: commands wait for their next I'm Here.
   std::map<std::uint32_t, std::uint32_t> displaced_by_;
+  // When each valve was last polled (arm_polling) and last sent telemetry: a restarted valve
+  // has lost its automatic resends.
+  std::map<std::uint32_t, SteadyTime> polled_at_;
+  std::map<std::uint32_t, SteadyTime> heard_at_;
   BridgeCounters counters_;
   // The first status waits one I'm Here period, so that its valve count means something to a
   // client that trusts it as the size of the directory.
