@@ -143,6 +143,8 @@ void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& messag
         // It still works on its command; only where to reach it is unknown until it announces.
         displaced_by_[change.valve.serial] = message.serial;
         publish_presence(change.valve);
+        // Its offline expiry runs from its own last I'm Here, sooner than the cache allows for.
+        next_deadline_.reset();
         break;
       case directory::ChangeKind::kAppeared:
       case directory::ChangeKind::kReaddressed:
