@@ -150,5 +150,104 @@ TEST(ValveDirectory, ValvesAreListedBySerial) {
   EXPECT_EQ(valves[2].serial, 30u);
 }
 
+// ---- Faults: a displaced valve that never comes back, two valves at one address ----------
+
+TEST(ValveDirectory, ADisplacedValveThatNeverAnnouncesAgainGoesOfflineOnTime) {
+  // Its commands must end no later than a silent valve's: the timeout runs from its last I'm Here.
+  ValveDirectory directory(3s);
+  (void)hear(directory, 0xD9, announce(2), 0s);
+  (void)hear(directory, 0xDA, announce(3), 0s);
+  (void)hear(directory, 0xD9, announce(3), 500ms);  // 2 went silent; 3 moved down
+  EXPECT_EQ(directory.next_expiry(), kBoot + 3s);
+  EXPECT_TRUE(directory.expire(kBoot + 3s).empty());
+  const auto gone = directory.expire(kBoot + 3s + 1ms);
+  ASSERT_EQ(gone.size(), 1u);
+  EXPECT_EQ(gone[0].kind, ChangeKind::kWentOffline);
+  EXPECT_EQ(gone[0].valve.serial, 2u);
+  EXPECT_FALSE(gone[0].valve.online);
+  const auto later = directory.expire(kBoot + 10s);  // 3 goes offline; 2 is not reported again
+  ASSERT_EQ(later.size(), 1u);
+  EXPECT_EQ(later[0].valve.serial, 3u);
+}
+
+TEST(ValveDirectory, TwoValvesAnnouncingAtOneAddressAreAConflictUntilOneMovesAway) {
+  ValveDirectory directory(3s);
+  (void)hear(directory, 0xD9, announce(2), 0s);
+  (void)hear(directory, 0xDA, announce(3), 0s);
+  // 3 claims 0xD9: a readdress as far as anyone can tell yet.
+  auto changes = hear(directory, 0xD9, announce(3), 300ms);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kDisplaced);
+  EXPECT_EQ(changes[1].kind, ChangeKind::kReaddressed);
+  // 2 announces there again: suspected, nothing attributed to the address any more.
+  changes = hear(directory, 0xD9, announce(2), 1s);
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kCameOnline);
+  EXPECT_EQ(directory.contest_of(2), (Contest{0xD9, 3, 2, false}));
+  EXPECT_FALSE(directory.serial_at(0xD9));
+  // 3 again: confirmed, reported once for each.
+  changes = hear(directory, 0xD9, announce(3), 1300ms);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kAddressConflict);
+  EXPECT_EQ(changes[0].valve.serial, 3u);
+  EXPECT_EQ(changes[0].other, 2u);
+  EXPECT_EQ(changes[1].kind, ChangeKind::kAddressConflict);
+  EXPECT_EQ(changes[1].valve.serial, 2u);
+  EXPECT_EQ(changes[1].other, 3u);
+  EXPECT_EQ(directory.contest_of(3), (Contest{0xD9, 3, 2, true}));
+  EXPECT_TRUE(hear(directory, 0xD9, announce(2), 2s).empty());  // heartbeats: nothing new
+  EXPECT_TRUE(hear(directory, 0xD9, announce(3), 2300ms).empty());
+  EXPECT_EQ(directory.online_count(), 2u);
+  // 3 moves away: 0xD9 is 2's again.
+  changes = hear(directory, 0xDA, announce(3), 2500ms);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kConflictCleared);
+  EXPECT_EQ(changes[0].valve.serial, 2u);
+  EXPECT_EQ(changes[0].other, 3u);
+  EXPECT_EQ(changes[1].kind, ChangeKind::kReaddressed);
+  EXPECT_FALSE(directory.contest_of(2));
+  EXPECT_EQ(directory.serial_at(0xD9), 2u);
+  EXPECT_EQ(directory.serial_at(0xDA), 3u);
+}
+
+TEST(ValveDirectory, AConflictEndsWhenOneOfTheValvesGoesSilent) {
+  ValveDirectory directory(3s);
+  (void)hear(directory, 0xD9, announce(2), 0s);
+  (void)hear(directory, 0xD9, announce(3), 300ms);
+  (void)hear(directory, 0xD9, announce(2), 1s);
+  (void)hear(directory, 0xD9, announce(3), 1300ms);
+  ASSERT_TRUE(directory.contest_of(2));
+  (void)hear(directory, 0xD9, announce(2), 2s);  // 3 is silent from 1.3 s on
+  const auto changes = directory.expire(kBoot + 4300ms + 1ms);
+  ASSERT_EQ(changes.size(), 2u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kWentOffline);
+  EXPECT_EQ(changes[0].valve.serial, 3u);
+  EXPECT_EQ(changes[1].kind, ChangeKind::kConflictCleared);
+  EXPECT_EQ(changes[1].valve.serial, 2u);
+  EXPECT_EQ(directory.serial_at(0xD9), 2u);
+}
+
+TEST(ValveDirectory, AValveComingBackToItsAddressWhileTheOneThatTookItMovesOnIsNoConflict) {
+  // A valve restarting: the bank re-ranks, it reclaims its address and the valve that stood in
+  // moves back up a moment later. Suspected for that moment, never a conflict.
+  ValveDirectory directory(3s);
+  (void)hear(directory, 0xD9, announce(2), 0s);
+  (void)hear(directory, 0xDA, announce(3), 0s);
+  (void)hear(directory, 0xD9, announce(3), 200ms);   // 2 off, 3 moves down
+  (void)hear(directory, 0xD9, announce(2), 1500ms);  // 2 back
+  EXPECT_TRUE(directory.contest_of(2));
+  const auto changes = hear(directory, 0xDA, announce(3), 1531ms);
+  ASSERT_EQ(changes.size(), 1u);
+  EXPECT_EQ(changes[0].kind, ChangeKind::kReaddressed);
+  EXPECT_FALSE(directory.contest_of(2));
+  EXPECT_EQ(directory.serial_at(0xD9), 2u);
+  EXPECT_EQ(directory.serial_at(0xDA), 3u);
+  // After longer than the timeout it is simply a readdress: no suspicion at all.
+  (void)hear(directory, 0xD9, announce(3), 5s);
+  (void)hear(directory, 0xD9, announce(2), 9s);
+  EXPECT_FALSE(directory.contest_of(2));
+  EXPECT_EQ(directory.serial_at(0xD9), 2u);
+}
+
 }  // namespace
 }  // namespace teejet::directory

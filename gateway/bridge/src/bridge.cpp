@@ -1,5 +1,7 @@
 #include "teejet/bridge/bridge.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 
 #include "command_tracker.hpp"
@@ -34,6 +36,46 @@ std::string hex_address(std::uint8_t address) {
   return text;
 }
 
+std::string contest_reason(const directory::Contest& contest) {
+  const auto [low, high] = std::minmax(contest.holder, contest.claimant);
+  return "address " + hex_address(contest.address) + " is claimed by " + codec::format_serial(low) +
+         " and " + codec::format_serial(high);
+}
+
+// Boot code identifies itself and keeps the bus settings but does not run the application
+// (docs/valve-sim.md#power-off-power-on-and-the-churn): version and baud rate only. Stop is let
+// through because it is harmless and a stop must never be refused when it can be sent.
+bool runs_in_boot_code(const codec::ToValveMessage& message) {
+  return std::holds_alternative<codec::RequestVersion>(message) ||
+         std::holds_alternative<codec::BaudRate>(message) ||
+         std::holds_alternative<codec::Stop>(message);
+}
+
+std::string boot_code_reason(std::uint32_t serial) {
+  return "valve " + codec::format_serial(serial) + " is running boot code";
+}
+
+// How long a polled valve may send no telemetry before the gateway takes it for a valve that
+// restarted (its automatic resends live in RAM) and polls it again: two I'm Here periods, or two
+// of the shortest resend period of the schedule if that is longer; nullopt when nothing in the
+// schedule is resent.
+std::optional<Duration> quiet_limit(const std::vector<codec::ToValveMessage>& poll) {
+  std::optional<Duration> shortest;
+  for (const auto& request : poll) {
+    std::visit(
+        [&](const auto& m) {
+          if constexpr (requires { m.resend_tenths; }) {
+            if (m.resend_tenths == 0) return;
+            const Duration period = std::chrono::milliseconds(100) * m.resend_tenths;
+            if (!shortest || period < *shortest) shortest = period;
+          }
+        },
+        request);
+  }
+  if (!shortest) return std::nullopt;
+  return std::max(Duration{2 * kStatusPeriod}, 2 * *shortest);
+}
+
 }  // namespace
 
 std::vector<codec::ToValveMessage> default_poll_schedule() {
@@ -50,6 +92,7 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       sink_(sink),
       clock_(std::move(clock)),
       directory_(config_.offline_after),
+      quiet_limit_(quiet_limit(config_.poll)),
       tracker_(std::make_unique<CommandTracker>(config_)),
       next_status_(clock_->steady() + kStatusPeriod) {}
 
@@ -93,12 +136,15 @@ void Bridge::handle_frame(const can::TimedFrame& frame) {
 void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& message,
                               Timestamp received, SteadyTime now) {
   bool rearm = false;
+  Outcome outcome;
   for (const auto& change : directory_.on_i_am_here(address, message, received, now)) {
     switch (change.kind) {
       case directory::ChangeKind::kDisplaced:
         // It still works on its command; only where to reach it is unknown until it announces.
         displaced_by_[change.valve.serial] = message.serial;
         publish_presence(change.valve);
+        // Its offline expiry runs from its own last I'm Here, sooner than the cache allows for.
+        next_deadline_.reset();
         break;
       case directory::ChangeKind::kAppeared:
       case directory::ChangeKind::kReaddressed:
@@ -106,19 +152,65 @@ void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& messag
         rearm = true;
         break;
       case directory::ChangeKind::kWentOffline:
+        break;
       case directory::ChangeKind::kModeChanged:
+        if (change.valve.boot_mode) {
+          // Only a restart gets a valve into its boot code: what it was doing is gone.
+          tracker_->lost(change.valve.serial,
+                         "valve " + codec::format_serial(change.valve.serial) +
+                             " restarted: it is running boot code",
+                         outcome);
+        } else {
+          rearm = true;  // restarted into its application, which has no resends armed yet
+        }
+        break;
+      case directory::ChangeKind::kAddressConflict: {
+        const auto contest = directory_.contest_of(change.valve.serial);
+        const auto reason = contest ? contest_reason(*contest) : "address contested";
+        if (change.valve.serial == message.serial) {  // once per conflict, not per valve
+          ++counters_.address_conflicts;
+          spdlog::warn(
+              "{}: neither valve can be told apart; telemetry from {} is dropped and "
+              "commands to them are rejected until one moves away or goes silent",
+              reason, hex_address(address));
+        }
+        tracker_->lost(change.valve.serial, reason, outcome);
+        if (change.valve.serial != message.serial) publish_presence(change.valve);
+        break;
+      }
+      case directory::ChangeKind::kConflictCleared:
+        conflict_cleared(change);  // the other valve of the conflict, announcing elsewhere
         break;
     }
   }
   displaced_by_.erase(message.serial);
   if (next_deadline_) next_deadline_ = std::min(*next_deadline_, now + config_.offline_after);
   const auto valve = *directory_.find(message.serial);
+  if (!rearm && polling_went_quiet(valve, now)) {
+    // A power glitch short of offline_after at an address nobody took: the I'm Here looks like
+    // any other, only the telemetry has stopped.
+    spdlog::info("{} sends no telemetry although polled (restarted?): polling it again",
+                 codec::format_serial(valve.serial));
+    rearm = true;
+  }
   if (rearm) arm_polling(valve);
   publish_presence(valve);
+  settle(outcome);
+}
+
+void Bridge::conflict_cleared(const directory::Change& change) {
+  spdlog::info("{}: address {} is no longer contested ({} moved away or went silent)",
+               codec::format_serial(change.valve.serial), hex_address(change.valve.address),
+               change.other ? codec::format_serial(*change.other) : "the other valve");
+  // Both valves answered the polls at the contested address; the one left may have had its
+  // resends replaced by the other's requests.
+  arm_polling(change.valve);
+  publish_presence(change.valve);
 }
 
 void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                               Timestamp received) {
+  heard_at_[serial] = clock_->steady();
   Outcome outcome;
   tracker_->heard(serial, message, outcome);
   settle(outcome);
@@ -132,6 +224,19 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
 
 void Bridge::arm_polling(const directory::ValveRecord& valve) {
   for (const auto& request : config_.poll) (void)send(valve.address, request);
+  polled_at_[valve.serial] = clock_->steady();
+}
+
+bool Bridge::polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const {
+  if (!quiet_limit_ || !valve.online || valve.boot_mode || directory_.contest_of(valve.serial)) {
+    return false;
+  }
+  SteadyTime last = SteadyTime::min();
+  if (const auto it = polled_at_.find(valve.serial); it != polled_at_.end()) last = it->second;
+  if (const auto it = heard_at_.find(valve.serial); it != heard_at_.end()) {
+    last = std::max(last, it->second);
+  }
+  return last != SteadyTime::min() && now - last > *quiet_limit_;
 }
 
 void Bridge::publish_presence(const directory::ValveRecord& valve) {
@@ -166,6 +271,10 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
     reject(unreachable_reason(*valve));
     return;
   }
+  if (const auto contest = directory_.contest_of(command.serial())) {
+    reject(contest_reason(*contest));  // a frame to that address would reach both valves
+    return;
+  }
   if (command.kind() == COMMAND_SET_BAUD_RATE && !config_.allow_baud_change) {
     reject("setting the baud rate is not allowed; start the gateway with --allow-baud-change");
     return;
@@ -173,6 +282,10 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   const auto message = dds::to_message(command);
   if (!message) {
     reject(message.error().reason);
+    return;
+  }
+  if (valve->boot_mode && !runs_in_boot_code(*message)) {
+    reject(boot_code_reason(command.serial()));
     return;
   }
   const auto frame = codec::encode(valve->address, *message);
@@ -245,8 +358,13 @@ void Bridge::tick() {
   const SteadyTime now = clock_->steady();
   Outcome outcome;
   for (const auto& change : directory_.expire(now)) {
+    if (change.kind == directory::ChangeKind::kConflictCleared) {
+      conflict_cleared(change);
+      continue;
+    }
     publish_presence(change.valve);
     tracker_->offline(change.valve.serial, outcome);
+    displaced_by_.erase(change.valve.serial);
   }
   tracker_->expire(now, outcome);
   settle(outcome);

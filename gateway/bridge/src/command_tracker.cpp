@@ -140,10 +140,14 @@ void CommandTracker::stopped(std::uint32_t serial, const std::string& reason, Ou
 }
 
 void CommandTracker::offline(std::uint32_t serial, Outcome& out) {
+  lost(serial, "valve " + codec::format_serial(serial) + " went offline", out);
+}
+
+void CommandTracker::lost(std::uint32_t serial, const std::string& reason, Outcome& out) {
   Valve& valve = valves_[serial];
-  end_motion(valve, COMMAND_TIMED_OUT, "valve went offline", out);
+  end_motion(valve, COMMAND_TIMED_OUT, reason, out);
   for (const auto& request : valve.requests) {
-    out.ended.push_back({request.command, COMMAND_TIMED_OUT, "valve went offline"});
+    out.ended.push_back({request.command, COMMAND_TIMED_OUT, reason});
   }
   valve.requests.clear();
 }

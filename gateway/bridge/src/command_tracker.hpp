@@ -46,6 +46,9 @@ class CommandTracker {
 
   // The valve went offline: nothing it was asked will be confirmed.
   void offline(std::uint32_t serial, Outcome& out);
+  // Nothing the valve was asked will be confirmed any more (it restarted, or its address is
+  // contested): every command followed for it ends TIMED_OUT with `reason`.
+  void lost(std::uint32_t serial, const std::string& reason, Outcome& out);
 
   // The gateway is going away: every command still followed ends TIMED_OUT with `reason`, so
   // that no commander is left waiting for a status that nobody will send.

@@ -69,7 +69,8 @@ struct BridgeCounters {
   std::uint64_t decode_errors = 0;  // frames of this PGN that did not decode
   std::uint64_t unattributed = 0;   // telemetry from an address no online valve announced
   std::uint64_t commands_rejected = 0;
-  std::uint64_t commands_ignored = 0;  // for serials this gateway has never seen
+  std::uint64_t commands_ignored = 0;   // for serials this gateway has never seen
+  std::uint64_t address_conflicts = 0;  // two valves found announcing at one address
   std::string last_decode_error;
 };
 
@@ -120,10 +121,14 @@ class Bridge {
   void handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                         Timestamp received);
   void arm_polling(const directory::ValveRecord& valve);
+  void conflict_cleared(const directory::Change& change);
+  // Polled, online, and no telemetry for longer than quiet_limit_: its resends are gone.
+  bool polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const;
   void publish_presence(const directory::ValveRecord& valve);
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
+
   // Publishes what the tracker ended and sends what it asked to restore.
   void settle(const Outcome& outcome);
   // Sends Stop to an online valve and ends its running command; false if not sent.
@@ -139,10 +144,15 @@ class Bridge {
 
   mutable std::mutex mutex_;
   directory::ValveDirectory directory_;
+  const std::optional<Duration> quiet_limit_;
   std::unique_ptr<CommandTracker> tracker_;
   std::map<std::uint32_t, std::set<ErrorKind>> latched_errors_;
   // Valves displaced from their address, and by whom: commands wait for their next I'm Here.
   std::map<std::uint32_t, std::uint32_t> displaced_by_;
+  // When each valve was last polled (arm_polling) and last sent telemetry: a restarted valve
+  // has lost its automatic resends.
+  std::map<std::uint32_t, SteadyTime> polled_at_;
+  std::map<std::uint32_t, SteadyTime> heard_at_;
   BridgeCounters counters_;
   // The first status waits one I'm Here period, so that its valve count means something to a
   // client that trusts it as the size of the directory.
