@@ -44,7 +44,12 @@ Result<std::optional<int>> simulated_valve_count(const std::string& can) {
 Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
   auto simulated = simulated_valve_count(config.can);
   if (!simulated) return simulated.error();
-  if (!*simulated) return BusBackend{can::make_bus(config.can, can::controller_side_filters()), {}};
+  if (!*simulated) {
+    // A gateway started before its CAN interface exists waits for it (docs/faults.md).
+    return BusBackend{can::make_bus(config.can, {.filters = can::controller_side_filters(),
+                                                 .wait_for_interface = true}),
+                      {}};
+  }
   // Unique per gateway, so that two embedded simulations in one process never share a bus.
   static std::atomic<int> instances{0};
   const std::string bus_name =

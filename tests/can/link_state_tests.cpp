@@ -94,6 +94,26 @@ TEST(LinkStateTest, GoneFromDownToo) {
   EXPECT_EQ(link.next_wake(far), t0 + 110ms);
 }
 
+TEST(LinkStateTest, MissingAtOpenWaitsLikeAVanishedInterface) {
+  LinkState link = link_state();
+  link.missing(t0);
+  EXPECT_EQ(link.state(), State::kGone);
+  EXPECT_TRUE(link.faulty());
+  EXPECT_FALSE(link.up());
+  EXPECT_FALSE(link.vanished(t0));  // already gone: nothing more to log
+  SteadyTime attempt = t0;
+  for (const auto backoff : {100ms, 200ms, 400ms, 500ms}) {
+    EXPECT_EQ(link.next_wake(far), attempt + backoff);
+    EXPECT_FALSE(link.reopen_due(attempt + backoff - 1ns));
+    EXPECT_TRUE(link.reopen_due(attempt + backoff));
+    attempt += backoff;
+    link.reopen_failed(attempt);
+  }
+  link.opened(true, attempt);
+  EXPECT_EQ(link.state(), State::kUp);
+  EXPECT_FALSE(link.faulty());
+}
+
 TEST(LinkStateTest, VanishingAgainKeepsTheBackoff) {
   LinkState link = link_state();
   link.opened(true, t0);

@@ -9,6 +9,12 @@ void LinkState::opened(bool up, SteadyTime now) {
   check_at_ = now + kCheckInterval;
 }
 
+void LinkState::missing(SteadyTime now) {
+  state_ = State::kGone;
+  reopen_backoff_ = reopen_min_;
+  reopen_at_ = now + reopen_backoff_;
+}
+
 bool LinkState::down(SteadyTime now) {
   if (state_ != State::kUp) return false;
   state_ = State::kDown;

@@ -12,6 +12,9 @@
 //    └──── IFF_UP ───────┘                            │
 //    ▲                                                │
 //    └───────────────── opened (up or down) ◀─────────┘
+//
+// A bus told to wait for its interface (SocketCanOptions::wait_for_interface) that finds none at
+// open() starts gone: closed ──missing──▶ gone, and from there as above.
 
 #include <chrono>
 #include <cstdint>
@@ -37,6 +40,8 @@ class LinkState {
 
   // A socket was bound (open() or a reopen): up or down as the interface flags said.
   void opened(bool up, SteadyTime now);
+  // open() found no interface and waits for one: closed → gone, first attempt after the minimum.
+  void missing(SteadyTime now);
   // close(): nothing to watch any more.
   void closed() { state_ = State::kClosed; }
 

@@ -16,6 +16,17 @@
 #include "kernel_frame.hpp"
 
 namespace teejet::can {
+namespace {
+
+Error missing_interface(const std::string& interface) {
+  return Error{ErrorCode::kUnavailable, interface + ": no such interface", ENODEV};
+}
+
+}  // namespace
+
+bool is_missing_interface(const Error& error) {
+  return error.code == ErrorCode::kUnavailable && error.os_error == ENODEV;
+}
 
 RawSocket::~RawSocket() { ::close(fd_); }
 
@@ -74,14 +85,21 @@ Result<OpenedSocket> open_socket(const std::string& interface, const SocketCanOp
   }
 
   const unsigned ifindex = ::if_nametoindex(interface.c_str());
-  if (ifindex == 0) {
-    const int error_number = errno == 0 ? ENODEV : errno;
-    return Error{ErrorCode::kSystem, interface + ": no such interface", error_number};
-  }
+  if (ifindex == 0) return missing_interface(interface);
   sockaddr_can address{};
   address.can_family = AF_CAN;
   address.can_ifindex = static_cast<int>(ifindex);
   if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof address) < 0) {
+    const int error_number = errno;
+    // CAN_RAW refuses a device that is not CAN with ENODEV; one deleted since the lookup
+    // above gives the same errno and is missing, not wrong.
+    if (error_number == ENODEV) {
+      if (::if_nametoindex(interface.c_str()) != ifindex) return missing_interface(interface);
+      return Error{ErrorCode::kInvalidValue,
+                   interface + ": not a CAN interface (bind: " + error_text(error_number) + ")",
+                   error_number};
+    }
+    errno = error_number;
     return fail("bind");
   }
   return OpenedSocket{std::move(socket), static_cast<int>(ifindex)};

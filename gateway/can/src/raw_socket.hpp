@@ -41,6 +41,10 @@ struct OpenedSocket {
 // buffer) and binds it to `interface` by name. On failure, says why with errno.
 Result<OpenedSocket> open_socket(const std::string& interface, const SocketCanOptions& options);
 
+// open_socket()'s error for an interface that does not exist (yet): the one failure that waiting
+// can cure, unlike a name that is too long or names an interface that is not CAN.
+bool is_missing_interface(const Error& error);
+
 // IFF_UP of the interface, asked through the socket: nullopt with errno set when that fails.
 std::optional<bool> interface_up(int fd, const std::string& interface);
 

@@ -100,7 +100,21 @@ struct SocketCanBus::State {
   }
 
   void link_up() {
-    if (link.up()) spdlog::info("{}: link up again", name);
+    if (!link.up()) return;
+    spdlog::info("{}: link up again", name);
+    controller_reset();
+  }
+
+  // Bringing an interface up (or a new one) restarts its controller: what error frames said
+  // about the old one no longer holds, and a bus-off that ended this way sends no
+  // CAN_ERR_RESTARTED.
+  void controller_reset() {
+    if (controller.state == BusState::kErrorActive) return;
+    controller.state = BusState::kErrorActive;
+    controller.tx_errors = 0;
+    controller.rx_errors = 0;
+    controller.controller_problems = 0;
+    spdlog::info("{}: controller error-active again (link restarted)", name);
   }
 
   void vanished(int error_number) {
@@ -121,6 +135,7 @@ struct SocketCanBus::State {
     drops.new_socket();
     const auto up = interface_up(socket->fd(), name);
     link.opened(up.value_or(true), steady_now());
+    controller_reset();
   }
 
   // Reopens a vanished interface when its backoff is due. Cheap and non-blocking.
@@ -198,9 +213,16 @@ struct SocketCanBus::State {
     if (batch.drop_counter) drops.note(*batch.drop_counter);
     for (const ErrorFrameReport& report : batch.errors) {
       if (apply(report, controller)) {
-        spdlog::warn("{}: controller {} (tx errors {}, rx errors {}, problems 0x{:02x})", name,
-                     to_string(controller.state), controller.tx_errors, controller.rx_errors,
-                     controller.controller_problems);
+        // Frames held for retry would go out long after their time once the controller is
+        // back: a valve must not move to a target its commander has given up on.
+        const std::size_t dropped =
+            controller.state == BusState::kBusOff ? discard_retry() : std::size_t{0};
+        spdlog::warn(
+            "{}: controller {} (tx errors {}, rx errors {}, problems 0x{:02x}){}{}", name,
+            to_string(controller.state), controller.tx_errors, controller.rx_errors,
+            controller.controller_problems,
+            controller.state == BusState::kBusOff ? "; refusing to send until it restarts" : "",
+            dropped_note(dropped));
       }
     }
     if (!batch.frames.empty() || !batch.errors.empty()) link_up();
@@ -238,7 +260,15 @@ Status SocketCanBus::open() {
     }
   }
   Result<OpenedSocket> opened = open_socket(interface_, options_);
-  if (!opened) return opened.error();
+  if (!opened) {
+    if (!options_.wait_for_interface || !is_missing_interface(opened.error())) {
+      return opened.error();
+    }
+    s.link.missing(steady_now());
+    spdlog::warn("{}: no such interface; waiting for it, retrying every {}..{} ms", interface_,
+                 options_.reopen_backoff_min.count(), options_.reopen_backoff_max.count());
+    return {};
+  }
   s.adopt(std::move(opened).value());
   spdlog::info("{}: SocketCAN open (ifindex {}, {} filter(s)){}", interface_, s.ifindex,
                options_.filters.size(), s.link.state() == Link::kDown ? ", link is down" : "");
@@ -275,6 +305,12 @@ Status SocketCanBus::send(const codec::CanFrame& frame) {
   if (!s.socket) {
     ++s.counters.tx_failed;
     return Error{ErrorCode::kUnavailable, interface_ + ": interface is gone; reopening", ENODEV};
+  }
+  if (s.controller.state == BusState::kBusOff) {
+    ++s.counters.tx_failed;
+    return Error{ErrorCode::kUnavailable,
+                 interface_ + ": controller is bus-off; nothing is sent until it restarts",
+                 ENETDOWN};
   }
   const can_frame kernel_frame = to_kernel(frame);
   if (!s.retry.empty()) return s.queue_for_retry(kernel_frame, ENOBUFS);  // keep the order

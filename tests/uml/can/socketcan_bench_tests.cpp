@@ -475,12 +475,62 @@ TEST_F(SocketCanBench, SendAloneNoticesAndRecoversADeletedInterface) {
 }
 
 TEST_F(SocketCanBench, OpenFailsVisiblyForAMissingInterface) {
-  SocketCanBus bus("tjbench-none");
+  SocketCanBus bus("tjbench-none");  // the default: no waiting
   const Status status = bus.open();
-  EXPECT_FALSE(status);
+  ASSERT_FALSE(status);
   EXPECT_EQ(status.error().os_error, ENODEV) << status.error().reason;
+  EXPECT_EQ(status.error().reason, "tjbench-none: no such interface");
   EXPECT_FALSE(bus.send(frame(0x18EFD8D5, {0x11})));
   EXPECT_FALSE(bus.receive(0ms));
+}
+
+TEST_F(SocketCanBench, WaitsForAMissingInterfaceAndUsesItOnceCreated) {
+  const std::string late = interface + "l";
+  SocketCanBus bus(late, {.filters = controller_side_filters(), .wait_for_interface = true});
+  ASSERT_TRUE(bus.open());
+  EXPECT_EQ(bus.statistics().state, BusState::kDown);
+  const Status refused = bus.send(frame(0x18EFD8D5, {0x11}));
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().os_error, ENODEV) << refused.error().reason;
+  // Waiting costs nothing while the backoff has grown to its maximum.
+  const auto cpu_before = thread_cpu();
+  EXPECT_FALSE(bus.receive(1s));
+  const auto cpu = thread_cpu() - cpu_before;
+  EXPECT_LT(cpu, 100ms);
+  EXPECT_EQ(bus.statistics().reopens, 0u);
+
+  ASSERT_EQ(shell("ip link add dev " + late + " type vcan && ip link set " + late + " up"), 0);
+  const auto created_at = SteadyClock::now();
+  RawPeer peer(late);
+  ASSERT_TRUE(peer.ok());
+  std::optional<TimedFrame> got;
+  // The peer's frames reach the bus only once it has reopened: send until one is received.
+  while (!got && SteadyClock::now() - created_at < 2s) {
+    ASSERT_TRUE(peer.send(eff(0x18EFD5D8), {0x02}));
+    got = bus.receive(20ms);
+  }
+  const auto waited = SteadyClock::now() - created_at;
+  (void)shell("ip link del " + late);
+  ASSERT_TRUE(got);
+  EXPECT_LT(waited, 1s);  // the backoff's maximum is 500 ms
+  const auto stats = bus.statistics();
+  EXPECT_EQ(stats.reopens, 1u);
+  EXPECT_EQ(stats.state, BusState::kErrorActive);
+  std::cout << "[ measure  ] missing at open: waiting 1 s used " << cpu.count()
+            << " us CPU; frames " << ms(waited) << " ms after creating the interface\n";
+}
+
+TEST_F(SocketCanBench, NamesThatCanNeverWorkFailAtOpenEvenWhenWaiting) {
+  SocketCanBus not_can("lo", {.wait_for_interface = true});
+  const Status refused = not_can.open();
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().code, ErrorCode::kInvalidValue);
+  EXPECT_EQ(refused.error().reason, "lo: not a CAN interface (bind: No such device)");
+
+  SocketCanBus too_long("tjbench-sixteen!", {.wait_for_interface = true});  // IFNAMSIZ is 16
+  const Status invalid = too_long.open();
+  ASSERT_FALSE(invalid);
+  EXPECT_EQ(invalid.error().reason, "'tjbench-sixteen!' is not a network interface name");
 }
 
 // ---- error frames, drops, retry queue ---------------------------------------------------------
@@ -527,6 +577,52 @@ TEST_F(SocketCanBench, ErrorFramesBecomeBusStateAndNeverData) {
   EXPECT_EQ(stats.controller_problems, 0u);
   EXPECT_EQ(stats.error_frames, 5u);
   EXPECT_EQ(stats.frames_in, 5u);  // the markers only
+}
+
+TEST_F(SocketCanBench, BusOffRefusesSendsUntilTheControllerRestarts) {
+  SocketCanBus bus(interface, {.filters = controller_side_filters()});
+  ASSERT_TRUE(bus.open());
+  RawPeer peer(interface);
+  ASSERT_TRUE(peer.ok());
+  const auto inject = [&](canid_t classes, std::vector<std::uint8_t> data, BusState expected) {
+    data.resize(CAN_ERR_DLC);
+    ASSERT_TRUE(peer.send(CAN_ERR_FLAG | classes, data));
+    ASSERT_TRUE(
+        receive_until_stats(bus, [&](const BusStatistics& s) { return s.state == expected; }));
+  };
+  // Error-passive still transmits: the frame goes out.
+  inject(CAN_ERR_CRTL | CAN_ERR_CNT, {0, CAN_ERR_CRTL_TX_PASSIVE, 0, 0, 0, 0, 130, 0},
+         BusState::kErrorPassive);
+  EXPECT_TRUE(bus.send(frame(0x18EFD8D5, {0x01})));
+  const auto seen = [](RawPeer& on) -> int {
+    auto got = on.receive(1s);
+    return got ? got->data[0] : -1;
+  };
+  EXPECT_EQ(seen(peer), 0x01);
+
+  inject(CAN_ERR_BUSOFF, {}, BusState::kBusOff);
+  const Status refused = bus.send(frame(0x18EFD8D5, {0x02}));
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().reason,
+            interface + ": controller is bus-off; nothing is sent until it restarts");
+
+  inject(CAN_ERR_RESTARTED, {}, BusState::kErrorActive);
+  EXPECT_TRUE(bus.send(frame(0x18EFD8D5, {0x03})));
+  EXPECT_EQ(seen(peer), 0x03);  // not 0x02: the refused frame never went out
+
+  // Taking the link down and up is the other way a controller leaves bus-off.
+  inject(CAN_ERR_BUSOFF, {}, BusState::kBusOff);
+  ASSERT_EQ(link("down"), 0);
+  ASSERT_TRUE(
+      receive_until_stats(bus, [](const BusStatistics& s) { return s.state == BusState::kDown; }));
+  ASSERT_EQ(link("up"), 0);
+  ASSERT_TRUE(receive_until_stats(
+      bus, [](const BusStatistics& s) { return s.state == BusState::kErrorActive; }));
+  RawPeer after_restart(interface);  // the old peer's next read reports the link going down
+  ASSERT_TRUE(after_restart.ok());
+  EXPECT_TRUE(bus.send(frame(0x18EFD8D5, {0x04})));
+  EXPECT_EQ(seen(after_restart), 0x04);
+  EXPECT_EQ(bus.statistics().tx_failed, 1u);
 }
 
 TEST_F(SocketCanBench, KernelDropsAreCountedAndAccumulateAcrossReopens) {

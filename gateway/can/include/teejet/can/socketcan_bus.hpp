@@ -18,6 +18,11 @@ struct SocketCanOptions {
   // (capped by net.core.rmem_max). 1 MiB holds ~1300 frames, over half a second of a saturated
   // 250 kbit/s bus; 0 keeps the kernel default (212992 bytes: ~280 frames).
   int receive_buffer_bytes = 1 << 20;
+  // When the interface does not exist at open(): false fails open() (ENODEV); true opens the
+  // bus in the gone state and retries with the reopen backoff, as for an interface deleted
+  // later (a gateway started before its CAN driver is loaded). Names that can never work (too
+  // long, an interface that is not CAN) and a refused socket() fail open() either way.
+  bool wait_for_interface = false;
 };
 
 // CAN_RAW socket on a Linux SocketCAN interface (can0, vcan0). Kernel filters keep foreign
@@ -25,7 +30,8 @@ struct SocketCanOptions {
 // kernel's receive timestamp, error frames become BusState and error counters, and the kernel's
 // drop counter (SO_RXQ_OVFL) shows as rx_dropped. Link faults are survived: after ENETDOWN the
 // socket is kept and works again when the link comes back up; after ENODEV (interface deleted)
-// it is closed and reopened with backoff until the interface returns.
+// it is closed and reopened with backoff until the interface returns. While the controller
+// reports bus-off, send() refuses (nothing can go out) until it says it restarted.
 class SocketCanBus final : public Bus {
  public:
   explicit SocketCanBus(std::string interface_name, SocketCanOptions options = {});
