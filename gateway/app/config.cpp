@@ -16,6 +16,10 @@ using yaml::Reader;
 constexpr double kMaxSeconds = 3600.0;
 // Wider than any real mismatch, and still well short of "anywhere on the dial".
 constexpr double kMaxToleranceDegrees = 45.0;
+// Per valve: a whole 1 Mbit/s bus's frames per second, and what one valve's command queue holds
+// (topics.cpp: 256 commands per valve).
+constexpr double kMaxCommandRate = 10'000.0;
+constexpr long long kMaxCommandBurst = 256;
 
 std::string format_seconds(Duration duration) {
   std::ostringstream text;
@@ -89,9 +93,10 @@ bridge::ValveLimits read_limits(const Reader& reader, const YAML::Node& node,
 }
 
 void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& config) {
-  reader.expect_keys(g, "gateway",
-                     {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
-                      "on_commander_lost", "allow_baud_change", "receive_coalesce_us"});
+  reader.expect_keys(
+      g, "gateway",
+      {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
+       "on_commander_lost", "allow_baud_change", "receive_coalesce_us", "reject_unknown_serials"});
   if (g["name"]) config.bridge.gateway_name = reader.scalar(g["name"], "gateway.name");
   if (g["can"]) config.can = reader.scalar(g["can"], "gateway.can");
   if (g["domain"]) {
@@ -117,6 +122,10 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
     config.bridge.allow_baud_change =
         reader.flag(g["allow_baud_change"], "gateway.allow_baud_change");
   }
+  if (g["reject_unknown_serials"]) {
+    config.bridge.reject_unknown_serials =
+        reader.flag(g["reject_unknown_serials"], "gateway.reject_unknown_serials");
+  }
   if (g["receive_coalesce_us"]) {
     config.receive_coalesce = std::chrono::microseconds(
         reader.integer(g["receive_coalesce_us"], "gateway.receive_coalesce_us", 0, 10'000));
@@ -124,9 +133,9 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
 }
 
 void read_commands(const Reader& reader, const YAML::Node& c, GatewayConfig& config) {
-  reader.expect_keys(
-      c, "commands",
-      {"completion_tolerance_deg", "reply_timeout_s", "move_margin_s", "assumed_dps"});
+  reader.expect_keys(c, "commands",
+                     {"completion_tolerance_deg", "reply_timeout_s", "move_margin_s", "assumed_dps",
+                      "rate_per_valve", "burst_per_valve"});
   if (c["completion_tolerance_deg"]) {
     config.bridge.completion_tolerance_degrees =
         reader.number(c["completion_tolerance_deg"], "commands.completion_tolerance_deg", 0,
@@ -144,6 +153,16 @@ void read_commands(const Reader& reader, const YAML::Node& c, GatewayConfig& con
     // The Degrees Per Second message's range; 0 would make every move's travel time infinite.
     config.bridge.assumed_dps =
         static_cast<unsigned>(reader.integer(c["assumed_dps"], "commands.assumed_dps", 1, 359));
+  }
+  // Above a bus's capacity (~2,000 frames/s at 250 kbit/s, ~8,000 at 1 Mbit/s) a limit limits
+  // nothing; 0 turns it off.
+  if (c["rate_per_valve"]) {
+    config.bridge.command_rate_per_valve =
+        reader.number(c["rate_per_valve"], "commands.rate_per_valve", 0, kMaxCommandRate);
+  }
+  if (c["burst_per_valve"]) {
+    config.bridge.command_burst_per_valve = static_cast<unsigned>(
+        reader.integer(c["burst_per_valve"], "commands.burst_per_valve", 1, kMaxCommandBurst));
   }
 }
 

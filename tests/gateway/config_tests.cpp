@@ -97,7 +97,7 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
   EXPECT_EQ(error_of("gateway:\n  nmae: x\n"),
             "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "
             "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change, "
-            "receive_coalesce_us)");
+            "receive_coalesce_us, reject_unknown_serials)");
   EXPECT_EQ(error_of("polling: {}\n"),
             "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, valves, "
             "simulator)");
@@ -219,6 +219,26 @@ TEST(GatewayConfig, SimulatedValveCount) {
   EXPECT_FALSE(simulated_valve_count("sim:"));
   EXPECT_FALSE(simulated_valve_count("sim:0"));
   EXPECT_FALSE(simulated_valve_count("sim:4x"));
+}
+
+// Issue 10, item 3: what a flooding or mistaken commander meets.
+TEST(GatewayConfig, CommandRateLimitAndUnknownSerials) {
+  const GatewayConfig defaults;
+  EXPECT_EQ(defaults.bridge.command_rate_per_valve, 100.0);
+  EXPECT_EQ(defaults.bridge.command_burst_per_valve, 20u);
+  EXPECT_FALSE(defaults.bridge.reject_unknown_serials);
+  const auto config = parse(
+      "gateway: {reject_unknown_serials: true}\n"
+      "commands: {rate_per_valve: 0, burst_per_valve: 256}\n");
+  EXPECT_TRUE(config.bridge.reject_unknown_serials);
+  EXPECT_EQ(config.bridge.command_rate_per_valve, 0.0);
+  EXPECT_EQ(config.bridge.command_burst_per_valve, 256u);
+  EXPECT_EQ(error_of("commands: {rate_per_valve: -1}"),
+            "test.yaml:1: commands.rate_per_valve: -1 is outside 0 to 10000");
+  EXPECT_EQ(error_of("commands: {burst_per_valve: 0}"),
+            "test.yaml:1: commands.burst_per_valve: 0 is not a whole number from 1 to 256");
+  EXPECT_EQ(error_of("gateway: {reject_unknown_serials: maybe}"),
+            "test.yaml:1: gateway.reject_unknown_serials: 'maybe' is neither true nor false");
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "command_rate_limiter.hpp"
 #include "command_tracker.hpp"
 
 namespace teejet::bridge {
@@ -76,6 +77,13 @@ std::optional<Duration> quiet_limit(const std::vector<codec::ToValveMessage>& po
   return std::max(Duration{2 * kStatusPeriod}, 2 * *shortest);
 }
 
+// 100, 0.5: as a person would write the configured value.
+std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
 }  // namespace
 
 std::vector<codec::ToValveMessage> default_poll_schedule() {
@@ -94,6 +102,8 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       directory_(config_.offline_after),
       quiet_limit_(quiet_limit(config_.poll)),
       tracker_(std::make_unique<CommandTracker>(config_)),
+      limiter_(std::make_unique<CommandRateLimiter>(config_.command_rate_per_valve,
+                                                    config_.command_burst_per_valve)),
       next_status_(clock_->steady() + kStatusPeriod) {}
 
 Bridge::~Bridge() = default;
@@ -259,14 +269,19 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   // tells a fresh reply from an old one by comparing it with the ACCEPTED stamp.
   const Timestamp taken = clock_->wall();
   const auto valve = directory_.find(command.serial());
-  if (!valve) {
-    ++counters_.commands_ignored;
-    return;
-  }
   const auto reject = [&](const std::string& reason) {
     ++counters_.commands_rejected;
     publish_status(command, COMMAND_REJECTED, reason, taken);
   };
+  if (!valve) {
+    if (config_.reject_unknown_serials) {
+      reject("no valve " + codec::format_serial(command.serial()) + " on this gateway's bus (" +
+             config_.can_interface + ")");
+      return;
+    }
+    ++counters_.commands_ignored;
+    return;
+  }
   if (!valve->online) {
     reject(unreachable_reason(*valve));
     return;
@@ -293,6 +308,12 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
     reject(frame.error().reason);
     return;
   }
+  if (!limiter_->admit(command.serial(), std::holds_alternative<codec::Stop>(*message),
+                       clock_->steady())) {
+    ++counters_.commands_rate_limited;
+    reject(rate_limit_reason(command.serial()));
+    return;
+  }
   if (const auto sent = bus_.send(*frame); !sent) {
     reject("CAN send failed: " + sent.error().reason);
     return;
@@ -308,6 +329,12 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   tracker_->sent(command.serial(), *message, command, commander, clock_->steady(), outcome);
   next_deadline_.reset();
   settle(outcome);
+}
+
+std::string Bridge::rate_limit_reason(std::uint32_t serial) const {
+  return "not sent: over the limit of " + number_text(config_.command_rate_per_valve) +
+         " commands/s (burst " + std::to_string(config_.command_burst_per_valve) + ") to valve " +
+         codec::format_serial(serial) + " (commands.rate_per_valve, commands.burst_per_valve)";
 }
 
 std::string Bridge::unreachable_reason(const directory::ValveRecord& valve) const {

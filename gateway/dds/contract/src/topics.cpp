@@ -17,6 +17,13 @@ const eprosima::fastrtps::Duration_t kCommandLease{2, 0};
 // spells "infinite" 0 here, and refuses every write with LENGTH_UNLIMITED.)
 constexpr std::int32_t kMaxInstances = 4096;
 constexpr std::int32_t kCommandsQueuedPerValve = 256;
+// What the gateway's command reader may hold per valve before it takes them. Far more than one
+// writer's queue: Fast DDS 2.9.1 stalls a writer for good once a KEEP_ALL reader refuses one of
+// its samples for a full instance (measured: 10,000 commands in 1 s to one valve, reader limit
+// 256 like the writer's: the last 256 never arrived in 30 s and every later write timed out;
+// with 4096 all 10,000 arrived within 1.24 s). Memory grows only with what is waiting, and the
+// gateway takes commands as they come.
+constexpr std::int32_t kCommandsHeldPerValve = 4096;
 
 template <class Qos>
 Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, int depth) {
@@ -55,6 +62,8 @@ DataWriterQos command_writer_qos() {
 }
 DataReaderQos command_reader_qos() {
   auto qos = reliable<DataReaderQos>(VOLATILE_DURABILITY_QOS, KEEP_ALL_HISTORY_QOS, 1);
+  qos.resource_limits().max_samples_per_instance = kCommandsHeldPerValve;
+  qos.resource_limits().max_samples = kMaxInstances * kCommandsHeldPerValve;
   qos.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
   qos.liveliness().lease_duration = kCommandLease;
   return qos;

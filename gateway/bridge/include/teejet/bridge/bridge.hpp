@@ -24,6 +24,7 @@
 namespace teejet::bridge {
 
 class CommandTracker;
+class CommandRateLimiter;
 struct Outcome;
 
 // Requests (re)sent to a valve whenever it appears, readdresses or comes back online, using the
@@ -49,6 +50,13 @@ struct BridgeConfig {
   Duration move_margin = std::chrono::seconds(3);    // added to a move's ETA
   unsigned assumed_dps = 90;  // until the valve reports its own degrees per second
   bool allow_baud_change = false;
+  // Commands sent to one valve per second, as a token bucket holding `command_burst_per_valve`;
+  // over it a command is REJECTED, never sent (Stop has a bucket of its own). 0: no limit.
+  double command_rate_per_valve = 100.0;
+  unsigned command_burst_per_valve = 20;
+  // A command for a serial this gateway has never seen: REJECTED saying so, or (false, for
+  // several gateways on one domain) ignored, since another gateway may own the valve.
+  bool reject_unknown_serials = false;
   std::optional<ValveLimits> default_limits;    // nullopt: limits unknown, targets not clamped
   std::map<std::uint32_t, ValveLimits> limits;  // per serial, overrides default_limits
 };
@@ -69,8 +77,9 @@ struct BridgeCounters {
   std::uint64_t decode_errors = 0;  // frames of this PGN that did not decode
   std::uint64_t unattributed = 0;   // telemetry from an address no online valve announced
   std::uint64_t commands_rejected = 0;
-  std::uint64_t commands_ignored = 0;   // for serials this gateway has never seen
-  std::uint64_t address_conflicts = 0;  // two valves found announcing at one address
+  std::uint64_t commands_ignored = 0;       // for serials this gateway has never seen
+  std::uint64_t commands_rate_limited = 0;  // of commands_rejected: over the per-valve limit
+  std::uint64_t address_conflicts = 0;      // two valves found announcing at one address
   std::string last_decode_error;
 };
 
@@ -87,8 +96,8 @@ class Bridge {
   void on_frames(std::span<const can::TimedFrame> frames);
 
   // `commander` identifies the writer that sent the command (for the fail-safe); empty if
-  // unknown. Commands for serials this gateway has not seen are ignored: another gateway may
-  // own them.
+  // unknown. Commands for serials this gateway has not seen are ignored (another gateway may
+  // own them) unless reject_unknown_serials is set.
   void on_command(const ValveCommand& command, const std::string& commander = {});
 
   // Offline detection, command deadlines and the once-a-second gateway status: whatever is due.
@@ -128,7 +137,7 @@ class Bridge {
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
-
+  std::string rate_limit_reason(std::uint32_t serial) const;
   // Publishes what the tracker ended and sends what it asked to restore.
   void settle(const Outcome& outcome);
   // Sends Stop to an online valve and ends its running command; false if not sent.
@@ -146,6 +155,7 @@ class Bridge {
   directory::ValveDirectory directory_;
   const std::optional<Duration> quiet_limit_;
   std::unique_ptr<CommandTracker> tracker_;
+  std::unique_ptr<CommandRateLimiter> limiter_;
   std::map<std::uint32_t, std::set<ErrorKind>> latched_errors_;
   // Valves displaced from their address, and by whom: commands wait for their next I'm Here.
   std::map<std::uint32_t, std::uint32_t> displaced_by_;
