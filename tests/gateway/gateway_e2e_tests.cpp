@@ -13,7 +13,7 @@
 #include <map>
 #include <thread>
 
-#include "gateway.hpp"
+#include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
@@ -37,57 +37,12 @@ using teejet::testing::latest_by_serial;
 using teejet::testing::test_domain;
 using Ecu = teejet::testing::DdsPeer;
 
-GatewayConfig sim_config(const std::string& name, int valves, std::uint32_t first_serial = 1) {
-  GatewayConfig config;
-  config.can = "sim:" + std::to_string(valves);
-  config.domain = test_domain();
-  config.bridge.gateway_name = name;
-  config.sim_first_serial = first_serial;
-  config.sim_degrees_per_second = 180;  // quick moves keep the suite short
-  config.bridge.offline_after = 1500ms;
-  config.bridge.move_margin = 1s;
-  config.bridge.default_limits = bridge::ValveLimits{0, 90};
-  return config;
-}
-
-// The gateway as teejet-gateway makes it: the bus its configuration names.
-std::unique_ptr<Gateway> make_gateway(const GatewayConfig& config) {
-  auto backend = make_bus_backend(config);
-  EXPECT_TRUE(backend) << backend.error().reason;
-  return std::make_unique<Gateway>(config, backend ? std::move(*backend) : BusBackend{});
-}
-
-ValveCommand command(std::uint32_t serial, CommandKind kind) {
-  ValveCommand c;
-  c.serial(serial);
-  c.kind(kind);
-  c.speed_percent(100);
-  c.direction(DIRECTION_OPEN);
-  return c;
-}
-
-ValveCommand move_to(std::uint32_t serial, float degrees) {
-  auto c = command(serial, COMMAND_TARGET_DEGREES);
-  c.degrees(degrees);
-  return c;
-}
-
-// Where a simulated valve really is: what the wire should have made it do.
-double position_of(Gateway& gateway, std::uint32_t serial) {
-  auto* simulator = gateway.simulator();
-  return simulator->inspect([&](const sim::ValveBank& bank) {
-    return bank.valve_with_serial(serial)->position(simulator->clock()->steady());
-  });
-}
-
-// The wire as the valves see it: every controller-to-valve frame, in order, from now on.
-std::unique_ptr<can::VirtualBus> watch_wire(Gateway& gateway) {
-  auto wire = std::make_unique<can::VirtualBus>(
-      gateway.simulator()->bus_name(),
-      can::VirtualBusOptions{.filters = can::valve_side_filters(), .queue_limit = 1'000'000});
-  EXPECT_TRUE(wire->open());
-  return wire;
-}
+using fixture::make_gateway;
+using fixture::position_of;
+using fixture::sim_config;
+using fixture::watch_wire;
+using teejet::testing::command;
+using teejet::testing::move_to;
 
 class GatewayE2E : public ::testing::Test {
  protected:

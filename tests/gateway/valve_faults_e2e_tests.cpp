@@ -10,7 +10,7 @@
 #include <cstdio>
 #include <map>
 
-#include "gateway.hpp"
+#include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
@@ -27,35 +27,11 @@ using teejet::testing::test_domain;
 using Ecu = teejet::testing::DdsPeer;
 using Clock = std::chrono::steady_clock;
 
-constexpr auto kOfflineAfter = 1500ms;
+constexpr auto kOfflineAfter = 1500ms;  // fixture::sim_config's offline_after
 
-GatewayConfig sim_config(const std::string& name, int valves) {
-  GatewayConfig config;
-  config.can = "sim:" + std::to_string(valves);
-  config.domain = test_domain();
-  config.bridge.gateway_name = name;
-  config.sim_degrees_per_second = 180;
-  config.bridge.offline_after = kOfflineAfter;
-  config.bridge.move_margin = 1s;
-  config.bridge.default_limits = bridge::ValveLimits{0, 90};
-  return config;
-}
-
-std::unique_ptr<Gateway> make_gateway(const GatewayConfig& config) {
-  auto backend = make_bus_backend(config);
-  EXPECT_TRUE(backend) << backend.error().reason;
-  return std::make_unique<Gateway>(config, backend ? std::move(*backend) : BusBackend{});
-}
-
-ValveCommand move_to(std::uint32_t serial, float degrees, std::uint8_t speed = 100) {
-  ValveCommand c;
-  c.serial(serial);
-  c.kind(COMMAND_TARGET_DEGREES);
-  c.speed_percent(speed);
-  c.direction(DIRECTION_OPEN);
-  c.degrees(degrees);
-  return c;
-}
+using fixture::make_gateway;
+using fixture::sim_config;
+using teejet::testing::move_to;
 
 ValveCommand version_request(std::uint32_t serial) {
   ValveCommand c;

@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "support/valve_commands.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -106,19 +107,8 @@ struct Case {
   bool rejected;  // expected REJECTED; otherwise any final state after ACCEPTED
 };
 
-ValveCommand make(std::uint32_t serial, CommandKind kind) {
-  ValveCommand c;
-  c.serial(serial);
-  c.kind(kind);
-  c.speed_percent(100);
-  c.direction(DIRECTION_OPEN);
-  return c;
-}
-ValveCommand target(std::uint32_t serial, float degrees) {
-  auto c = make(serial, COMMAND_TARGET_DEGREES);
-  c.degrees(degrees);
-  return c;
-}
+using teejet::testing::command;
+using teejet::testing::move_to;
 
 std::vector<Case> hostile_cases(std::uint32_t valve, std::uint32_t unknown) {
   std::vector<Case> cases;
@@ -132,14 +122,14 @@ std::vector<Case> hostile_cases(std::uint32_t valve, std::uint32_t unknown) {
                                                   {"target-360", 360.0f},
                                                   {"target-huge", 1e30f},
                                                   {"target-minus-huge", -1e30f}}) {
-    cases.push_back({name, target(valve, degrees), true});
-    auto relative = make(valve, COMMAND_DEGREES_FROM_POSITION);
+    cases.push_back({name, move_to(valve, degrees), true});
+    auto relative = command(valve, COMMAND_DEGREES_FROM_POSITION);
     relative.degrees(degrees);
     cases.push_back({"relative-" + name.substr(7), relative, true});
   }
   for (const auto kind : {COMMAND_MANUAL, COMMAND_TARGET_DEGREES, COMMAND_DEGREES_FROM_POSITION,
                           COMMAND_MILLISECONDS_TO_RUN}) {
-    auto fast = make(valve, kind);
+    auto fast = command(valve, kind);
     fast.degrees(10.0f);
     fast.speed_percent(255);
     cases.push_back({"speed-255-kind-" + std::to_string(kind), fast, true});
@@ -147,47 +137,47 @@ std::vector<Case> hostile_cases(std::uint32_t valve, std::uint32_t unknown) {
     over.speed_percent(101);
     cases.push_back({"speed-101-kind-" + std::to_string(kind), over, true});
   }
-  cases.push_back({"kind-42", make(valve, static_cast<CommandKind>(42)), true});
-  auto direction = target(valve, 10.0f);
+  cases.push_back({"kind-42", command(valve, static_cast<CommandKind>(42)), true});
+  auto direction = move_to(valve, 10.0f);
   direction.direction(static_cast<Direction>(7));
   cases.push_back({"direction-7", direction, true});
-  auto manual_direction = make(valve, COMMAND_MANUAL);
+  auto manual_direction = command(valve, COMMAND_MANUAL);
   manual_direction.direction(static_cast<Direction>(0x7FFFFFFF));
   cases.push_back({"manual-direction-max", manual_direction, true});
-  auto shortest_manual = make(valve, COMMAND_MANUAL);
+  auto shortest_manual = command(valve, COMMAND_MANUAL);
   shortest_manual.direction(DIRECTION_SHORTEST);
   cases.push_back({"manual-direction-shortest", shortest_manual, true});
-  auto telemetry = make(valve, COMMAND_REQUEST);
+  auto telemetry = command(valve, COMMAND_REQUEST);
   telemetry.telemetry(static_cast<Telemetry>(99));
   cases.push_back({"telemetry-99", telemetry, true});
-  auto version = make(valve, COMMAND_REQUEST);
+  auto version = command(valve, COMMAND_REQUEST);
   version.telemetry(TELEMETRY_VERSION);
   version.resend_tenths(1);
   cases.push_back({"version-resend-1", version, true});
   version.resend_tenths(255);
   cases.push_back({"version-resend-255", version, true});
-  auto baud = make(valve, COMMAND_SET_BAUD_RATE);
+  auto baud = command(valve, COMMAND_SET_BAUD_RATE);
   baud.bit_rate(125000);
   cases.push_back({"set-baud-rate", baud, true});
-  cases.push_back({"unknown-serial", target(unknown, 10.0f), true});
+  cases.push_back({"unknown-serial", move_to(unknown, 10.0f), true});
   // At the limits, and sent.
-  auto zero_ms = make(valve, COMMAND_MILLISECONDS_TO_RUN);
+  auto zero_ms = command(valve, COMMAND_MILLISECONDS_TO_RUN);
   zero_ms.milliseconds(0);
   cases.push_back({"milliseconds-0", zero_ms, false});
-  auto longest = make(valve, COMMAND_MILLISECONDS_TO_RUN);
+  auto longest = command(valve, COMMAND_MILLISECONDS_TO_RUN);
   longest.milliseconds(65535);
   longest.speed_percent(1);
   cases.push_back({"milliseconds-65535", longest, false});  // superseded by the next
-  auto still = target(valve, 60.0f);
+  auto still = move_to(valve, 60.0f);
   still.speed_percent(0);
   cases.push_back({"speed-0", still, false});
-  cases.push_back({"target-359.9", target(valve, 359.9f), false});
-  cases.push_back({"stop", make(valve, COMMAND_STOP), false});
-  auto slowest = make(valve, COMMAND_REQUEST);
+  cases.push_back({"target-359.9", move_to(valve, 359.9f), false});
+  cases.push_back({"stop", command(valve, COMMAND_STOP), false});
+  auto slowest = command(valve, COMMAND_REQUEST);
   slowest.telemetry(TELEMETRY_TEMPERATURE);
   slowest.resend_tenths(255);
   cases.push_back({"temperature-resend-255", slowest, false});
-  auto restore = make(valve, COMMAND_REQUEST);
+  auto restore = command(valve, COMMAND_REQUEST);
   restore.telemetry(TELEMETRY_TEMPERATURE);
   restore.resend_tenths(10);
   cases.push_back({"temperature-resend-10", restore, false});
@@ -287,8 +277,8 @@ int main(int argc, char** argv) {
   std::uint32_t refused = 0, valve_2_move = 0;
   const std::uint32_t first_flood_id = next_id + 1;
   for (int i = 1; i <= flood; ++i) {
-    if (write(target(valve_1, i % 2 ? 80.0f : 10.0f)) == 0) ++refused;
-    if (i == flood / 2) valve_2_move = write(target(valve_2, 45.0f));
+    if (write(move_to(valve_1, i % 2 ? 80.0f : 10.0f)) == 0) ++refused;
+    if (i == flood / 2) valve_2_move = write(move_to(valve_2, 45.0f));
     std::this_thread::sleep_until(flood_start + i * 100us);
   }
   const std::uint32_t last_flood_id = next_id;
@@ -324,7 +314,7 @@ int main(int argc, char** argv) {
   // 3. Good moves afterwards, once the flood is over: the flooded valve takes commands again.
   std::this_thread::sleep_for(300ms);  // the rate limit's refill, not a wait for an event
   for (const auto& [serial, degrees] : {std::pair{valve_1, 45.0f}, std::pair{valve_2, 20.0f}}) {
-    const auto id = write(target(serial, degrees));
+    const auto id = write(move_to(serial, degrees));
     const auto got = statuses.follow(id, std::chrono::steady_clock::now() + 15s);
     const bool done = got.size() == 2 && got[1].state() == COMMAND_COMPLETED;
     if (!done) ++unexpected;
