@@ -25,6 +25,7 @@ inline constexpr const char* kError = "teejet/valve/error";
 inline constexpr const char* kCommand = "teejet/valve/command";
 inline constexpr const char* kCommandStatus = "teejet/valve/command_status";
 inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
+inline constexpr const char* kBusFrame = "teejet/can/frame";
 
 // The topic each sample type is published on, and its fastddsgen type support. There is no
 // entry for a type without a topic: using one is a compile error ("incomplete type").
@@ -52,6 +53,7 @@ TEEJET_TOPIC_OF(ValveError, kError);
 TEEJET_TOPIC_OF(ValveCommand, kCommand);
 TEEJET_TOPIC_OF(CommandStatus, kCommandStatus);
 TEEJET_TOPIC_OF(GatewayStatus, kGatewayStatus);
+TEEJET_TOPIC_OF(BusFrame, kBusFrame);
 #undef TEEJET_TOPIC_OF
 
 // Every profile allows 4096 instances (valves, or valve and error kind) per topic.
