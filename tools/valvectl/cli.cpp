@@ -146,6 +146,11 @@ void define(Parser& parser) {
   app.add_option("--profile", global.profile_file, "Fast DDS XML profiles file, as the gateway's")
       ->check(CLI::ExistingFile);
   app.add_flag("--json", global.json, "machine-readable output: JSON objects and arrays");
+  app.add_option("--command-readers", global.command_readers,
+                 "before sending, wait (up to --timeout) until N command readers matched: the "
+                 "gateways and e.g. a teejet-record that must hear the command")
+      ->type_name("N")
+      ->transform(kWholeNumber);
   app.add_option("--timeout", raw.timeout_seconds,
                  "seconds to look for gateways and valves, and to wait for the first status")
       ->capture_default_str();

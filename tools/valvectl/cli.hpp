@@ -20,6 +20,9 @@ struct GlobalOptions {
   bool json = false;
   // How long to look for gateways and valves, and to wait for a command's first status.
   std::chrono::milliseconds timeout{5000};
+  // Command readers (the gateways, and recorders) to wait for before sending: commands are
+  // VOLATILE, so a reader that matches after the write never hears it. 0: the gateways.
+  std::size_t command_readers = 0;
 };
 
 struct ListOptions {

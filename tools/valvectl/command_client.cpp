@@ -78,8 +78,8 @@ CommandClient::~CommandClient() {
   participant_.delete_writer(command_writer_);
 }
 
-Result<bool> CommandClient::connect(std::size_t gateways, Deadline until,
-                                    const std::atomic<bool>& interrupted) {
+Result<bool> CommandClient::connect(std::size_t gateways, std::size_t command_readers,
+                                    Deadline until, const std::atomic<bool>& interrupted) {
   const std::size_t wanted = std::max<std::size_t>(gateways, 1);
   const bool reader_matched = wait_for_match(
       [this] {
@@ -103,7 +103,7 @@ Result<bool> CommandClient::connect(std::size_t gateways, Deadline until,
         command_writer_->get_publication_matched_status(status);
         return status.current_count;
       },
-      wanted, until, interrupted);
+      std::max(wanted, command_readers), until, interrupted);
 }
 
 std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {

@@ -37,9 +37,12 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   // command writer and waits until they match it too. Announcing the writer only after the
   // reader has matched gives the gateway a discovery round-trip to learn of the reader before it
   // writes a status (which is TRANSIENT_LOCAL as well, for the half-matched moment left).
+  // With `command_readers` above the gateways, the writer also waits for that many command
+  // readers (a recorder) until `until`, then sends anyway.
   // False when not even one gateway matched both by `until` or when interrupted; an Error when
   // DDS refused the writer.
-  Result<bool> connect(std::size_t gateways, Deadline until, const std::atomic<bool>& interrupted);
+  Result<bool> connect(std::size_t gateways, std::size_t command_readers, Deadline until,
+                       const std::atomic<bool>& interrupted);
 
   // Writes `command` with a fresh command_id and this client's origin; returns the id, or
   // nullopt when the write failed. Requires connect().

@@ -231,7 +231,8 @@ class Session {
     }
     CommandClient& client = **made;
     const auto connected =
-        client.connect(expected_gateways, after_timeout(), terminal_.interrupted);
+        client.connect(expected_gateways, invocation_.global.command_readers, after_timeout(),
+                       terminal_.interrupted);
     if (!connected) {
       complain(connected.error().reason);
       return kExitFailure;

@@ -199,14 +199,16 @@ class RecordWalker {
   const MessageVisitor& visit_;
 };
 
+Error not_mcap(std::span<const std::uint8_t> file) {
+  return Error{ErrorCode::kInvalidValue, file.size() < kMagicSize
+                                             ? "not an MCAP file: shorter than its magic bytes"
+                                             : "not an MCAP file: wrong magic bytes"};
+}
+
 }  // namespace
 
 Result<Contents> read_messages(std::span<const std::uint8_t> file, const MessageVisitor& visit) {
-  if (!has_magic(file)) {
-    return Error{ErrorCode::kInvalidValue, file.size() < kMagicSize
-                                               ? "not an MCAP file: shorter than its magic bytes"
-                                               : "not an MCAP file: wrong magic bytes"};
-  }
+  if (!has_magic(file)) return not_mcap(file);
   Contents contents;
   ByteReader in(file.subspan(kMagicSize));
   const auto opcode = in.u8();
@@ -251,8 +253,7 @@ Result<Contents> read_messages(std::span<const std::uint8_t> file, const Message
 }
 
 Result<std::optional<Summary>> read_summary(std::span<const std::uint8_t> file) {
-  if (!has_magic(file))
-    return Error{ErrorCode::kInvalidValue, "not an MCAP file: wrong magic bytes"};
+  if (!has_magic(file)) return not_mcap(file);
   if (file.size() < 2 * kMagicSize + kFooterRecordSize || !has_magic(file.last(kMagicSize))) {
     return std::optional<Summary>{};
   }

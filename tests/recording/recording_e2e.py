@@ -1,0 +1,375 @@
+#!/usr/bin/env python3
+"""teejet-record and teejet-replay end to end (issue 11), run inside a private network namespace.
+
+A gateway with simulated valves (--can sim:4 --record-frames, one valve with a latched error),
+an independent subscriber (sample_logger: typed Fast DDS readers, values decoded field by field)
+and teejet-record start on one domain; valves move, an error is cleared, the gateway stops.
+
+  record   the npm MCAP reader (tests/mcap-js/read-mcap.mjs: @mcap/core and Foxglove's omgidl
+           decoders) reads every channel; per topic the messages equal, in order and value, what
+           the subscriber received; --info agrees; the candump -L file holds every frame.
+  sigkill  the recorder is killed mid-run: the file reads up to its last complete chunk.
+  replay   the recording is replayed into a fresh domain: a new subscriber gets the same samples
+           in the same order, each gap within 5 ms of the recorded one, with the recorded
+           source timestamps.
+
+Every wait has a deadline; every failure says what differed.
+"""
+
+import argparse
+import json
+import os
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+GAP_TOLERANCE_NS = 5_000_000
+
+
+class Failure(Exception):
+    pass
+
+
+def check(condition, message):
+    if not condition:
+        raise Failure(message)
+
+
+def wait_for_line(path, text, deadline_s, proc=None):
+    """Until `text` appears in the file at `path`, or fail."""
+    end = time.monotonic() + deadline_s
+    while time.monotonic() < end:
+        if os.path.exists(path):
+            with open(path, errors="replace") as f:
+                if text in f.read():
+                    return
+        if proc is not None and proc.poll() is not None:
+            raise Failure(f"{proc.args[0]} exited {proc.returncode} before saying '{text}'")
+        time.sleep(0.02)
+    raise Failure(f"no '{text}' in {path} within {deadline_s} s")
+
+
+class Run:
+    def __init__(self, args, work):
+        self.args = args
+        self.work = work
+        self.procs = []
+
+    def path(self, name):
+        return os.path.join(self.work, name)
+
+    def start(self, name, argv, stdout=None):
+        err = open(self.path(name + ".err"), "w")
+        out = open(self.path(stdout), "w") if stdout else subprocess.DEVNULL
+        proc = subprocess.Popen(argv, stdout=out, stderr=err)
+        self.procs.append(proc)
+        return proc
+
+    def run(self, argv, timeout=60, expect=0):
+        done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
+        if expect is not None and done.returncode != expect:
+            raise Failure(f"{' '.join(argv)} exited {done.returncode}, expected {expect}\n"
+                          f"{done.stdout}{done.stderr}")
+        return done
+
+    def stop(self, proc, sig=signal.SIGINT, timeout=15):
+        proc.send_signal(sig)
+        try:
+            return proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            raise Failure(f"{proc.args[0]} did not stop within {timeout} s of {sig.name}")
+
+    def cleanup(self):
+        for proc in self.procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+
+    def binary(self, relative):
+        return os.path.join(self.args.build_dir, relative)
+
+    def start_logger(self, name, domain):
+        logger = self.start(name, [self.binary("tests/recording/recording_sample_logger"),
+                                   "--domain", str(domain)], stdout=name + ".jsonl")
+        wait_for_line(self.path(name + ".err"), "ready", 20, logger)
+        return logger
+
+    def start_recorder(self, output, extra=()):
+        recorder = self.start("recorder", [self.binary("tools/teejet-record/teejet-record"),
+                                           "-o", self.path(output), *extra])
+        wait_for_line(self.path("recorder.err"), "recording to", 20, recorder)
+        return recorder
+
+    def start_gateway(self):
+        config = self.path("gateway.yaml")
+        with open(config, "w") as f:
+            # TJV000003 starts with a latched high-voltage error, so that Clear Errors disposes.
+            f.write("simulator:\n  errors: ['TJV000003:high-voltage:16.2:15.5']\n")
+        return self.start("gateway", [self.binary("gateway/app/teejet-gateway"), "--can", "sim:4",
+                                      "--record-frames", "-c", config, "--log-level", "warn"])
+
+    def valvectl(self, *argv, timeout=30):
+        return self.run([self.binary("tools/valvectl/valvectl"), *argv], timeout=timeout)
+
+    def exercise_valves(self, command_readers):
+        # Commands are VOLATILE: valvectl waits until the gateway, the recorder and the
+        # subscriber all hear them, so that both have every command.
+        readers = ["--command-readers", str(command_readers), "--timeout", "20"]
+        self.valvectl("move", "TJV000001", "--to", "90", "--speed", "100", "--wait", *readers)
+        self.valvectl("move", "TJV000002", "--to", "45", "--speed", "60", "--wait", *readers)
+        self.valvectl("clear-errors", "TJV000003", "--wait", *readers)
+
+    def read_mcap(self, recording, *extra, expect=0):
+        done = self.run(["node", self.args.npm_reader, recording, *extra], timeout=120,
+                        expect=expect)
+        return [json.loads(line) for line in done.stdout.splitlines() if line.strip()], done
+
+    def read_jsonl(self, name):
+        with open(self.path(name)) as f:
+            return [json.loads(line) for line in f if line.strip()]
+
+
+def normalise(value):
+    """The npm decoder gives an IDL char as a one-character string, the logger as its code."""
+    if isinstance(value, dict):
+        return {k: (ord(v) if k == "test" and isinstance(v, str) and len(v) <= 1 and v else
+                    0 if k == "test" and v == "" else normalise(v)) for k, v in value.items()}
+    if isinstance(value, list):
+        return [normalise(v) for v in value]
+    return value
+
+
+def instance(topic, data):
+    """The DDS instance a sample belongs to: DDS keeps order per instance (and per writer), and
+    a reader takes a batch instance by instance, so order is compared per instance."""
+    if topic.startswith("teejet/can/frame"):
+        return (topic,)
+    if topic.startswith("teejet/gateway/status"):
+        return (topic, data.get("gateway"))
+    if topic.startswith("teejet/valve/error"):
+        return (topic, data.get("serial"), data.get("kind"))
+    return (topic, data.get("serial"))
+
+
+def logger_by_topic(lines):
+    instances = {}
+    for line in lines:
+        topic = line["topic"] + ("/disposed" if line["disposed"] else "")
+        instances.setdefault(instance(topic, line["data"]), []).append(line)
+    return instances
+
+
+def file_by_topic(messages):
+    instances = {}
+    for message in messages:
+        instances.setdefault(instance(message["topic"], message["data"]), []).append(message)
+    return instances
+
+
+def split_at(samples, settle_ns, time_key):
+    """Samples published before `settle_ns`, and from it on."""
+    cut = 0
+    while cut < len(samples) and int(samples[cut][time_key]) < settle_ns:
+        cut += 1
+    return samples[:cut], samples[cut:]
+
+
+def compare_topics(logged, recorded, what, settle_ns=0, prefix=False):
+    """Per instance: the same samples in the same order, with the same values and source
+    timestamps. Before `settle_ns` (when the test starts commanding, long after every reader
+    matched the gateway) a reader that matched the gateway's writer a moment after the other
+    may have missed an instance's first samples (the writer keeps only the last one for late
+    joiners): there the shorter list must be the end of the longer. With `prefix`, the file
+    may end early (a killed recorder). Returns per-topic counts and how many early samples one
+    side missed."""
+    missed = 0
+    counts = {}
+    if not prefix:
+        check(set(logged) == set(recorded),
+              f"{what}: instances differ: subscriber only "
+              f"{sorted(set(logged) - set(recorded), key=str)}, file only "
+              f"{sorted(set(recorded) - set(logged), key=str)}")
+    for key in sorted(recorded, key=str):
+        early_a, a = split_at(logged.get(key, []), settle_ns, "source_ns")
+        early_b, b = split_at(recorded[key], settle_ns, "publish_time")
+        shorter, longer = sorted((early_a, early_b), key=len)
+        tail = longer[len(longer) - len(shorter):] if shorter else []
+        check([normalise(x["data"]) for x in shorter] == [normalise(x["data"]) for x in tail],
+              f"{what}: {key}: the early samples differ beyond a late match")
+        missed += len(longer) - len(shorter)
+        if prefix:
+            a = a[:len(b)]
+        counts[key[0]] = counts.get(key[0], 0) + len(b) + len(early_b)
+        check(len(a) == len(b), f"{what}: {key}: subscriber got {len(a)}, file holds {len(b)}")
+        for i, (sample, message) in enumerate(zip(a, b)):
+            check(normalise(message["data"]) == normalise(sample["data"]),
+                  f"{what}: {key} #{i + 1}: file {message['data']} != subscriber {sample['data']}")
+            check(message["publish_time"] == sample["source_ns"],
+                  f"{what}: {key} #{i + 1}: publish time {message['publish_time']} != source "
+                  f"timestamp {sample['source_ns']}")
+    return counts, missed
+
+
+def make_recording(run, output, extra=()):
+    """Gateway, subscriber and recorder on domain 0; valves move; the gateway stops first."""
+    logger = run.start_logger("logger", 0)
+    recorder = run.start_recorder(output, extra)
+    gateway = run.start_gateway()
+    run.valvectl("list", "--wait-for", "4", "--timeout", "20")
+    settle_ns = time.time_ns()
+    run.exercise_valves(command_readers=3)
+    check(run.stop(gateway, signal.SIGTERM) == 0, "the gateway did not exit 0")
+    check(run.stop(recorder) == 0, "teejet-record did not exit 0 after SIGINT")
+    check(run.stop(logger) == 0, "the subscriber did not exit 0")
+    return run.read_jsonl("logger.jsonl"), settle_ns
+
+
+def case_record(run):
+    recording = run.path("run.mcap")
+    logged, settle_ns = make_recording(run, "run.mcap", ["--candump", run.path("run.log")])
+    messages, done = run.read_mcap(recording)
+    counts, missed = compare_topics(logger_by_topic(logged), file_by_topic(messages), "record",
+                                    settle_ns)
+    for topic in ("teejet/valve/presence", "teejet/valve/position", "teejet/valve/command",
+                  "teejet/valve/command_status", "teejet/valve/error",
+                  "teejet/valve/error/disposed", "teejet/gateway/status", "teejet/can/frame"):
+        check(counts.get(topic, 0) > 0, f"record: nothing on {topic}: {counts}")
+    # The moves reached their targets in the recorded positions.
+    finals = {}
+    for message in messages:
+        if message["topic"] == "teejet/valve/position":
+            finals[message["data"]["serial"]] = message["data"]["degrees"]
+    check(abs(finals.get(1, -1) - 90) <= 1 and abs(finals.get(2, -1) - 45) <= 1,
+          f"record: last recorded positions {finals}, expected TJV000001 at 90, TJV000002 at 45")
+
+    info = json.loads(run.run([run.binary("tools/teejet-record/teejet-record"), "--info",
+                               recording, "--json"]).stdout)
+    check(info["complete"], f"--info: not complete: {info}")
+    info_counts = {c["topic"]: c["messages"] for c in info["channels"] if c["messages"] > 0}
+    check(info_counts == counts, f"--info counts {info_counts} != {counts}")
+
+    with open(run.path("run.log")) as f:
+        lines = [line.rstrip("\n") for line in f]
+    frames = [m["data"] for m in messages if m["topic"] == "teejet/can/frame"]
+    check(len(lines) == len(frames), f"candump: {len(lines)} lines for {len(frames)} frames")
+    for line, frame in zip(lines, frames):
+        ident = f"{frame['id']:08X}" if frame["extended"] else f"{frame['id']:03X}"
+        body = "".join(f"{b:02X}" for b in frame["data"])
+        stamp = int(frame["stamp_ns"])
+        expected = (f"({stamp // 10**9:010d}.{stamp // 1000 % 10**6:06d}) "
+                    f"{frame['can_interface']} {ident}#{body}")
+        check(line == expected, f"candump: '{line}' != '{expected}'")
+    print(f"record: {len(messages)} messages on {len(counts)} channels equal to the subscriber's "
+          f"({missed} early sample(s) one of them missed by matching the gateway later); "
+          f"{len(lines)} candump lines; counts {json.dumps(counts, sort_keys=True)}")
+
+
+def case_sigkill(run):
+    logger = run.start_logger("logger", 0)
+    recording = run.path("killed.mcap")
+    recorder = run.start_recorder("killed.mcap", ["--chunk-size", "4K"])
+    gateway = run.start_gateway()
+    run.valvectl("list", "--wait-for", "4", "--timeout", "20")
+    settle_ns = time.time_ns()
+    run.valvectl("move", "TJV000001", "--to", "80", "--speed", "100", "--wait", "--timeout", "20",
+                 "--command-readers", "3")
+    # Until the file holds at least two closed chunks and more, then no chance to finish it.
+    end = time.monotonic() + 20
+    while os.path.getsize(recording) < 20_000 and time.monotonic() < end:
+        time.sleep(0.05)
+    recorder.send_signal(signal.SIGKILL)
+    recorder.wait(timeout=10)
+    size = os.path.getsize(recording)
+    messages, done = run.read_mcap(recording, expect=1)
+    check("read-mcap" in done.stderr, f"incomplete file without --allow-incomplete: {done.stderr}")
+    messages, done = run.read_mcap(recording, "--allow-incomplete")
+    check(len(messages) > 0, "nothing readable in the killed recording")
+    info = run.run([run.binary("tools/teejet-record/teejet-record"), "--info", recording,
+                    "--json"])
+    document = json.loads(info.stdout)
+    check(not document["complete"] and "incomplete" in info.stderr,
+          f"--info did not call the file incomplete: {info.stdout}{info.stderr}")
+    check(document["messages"] == len(messages),
+          f"--info reads {document['messages']} messages, the npm reader {len(messages)}")
+    # Every message read is one the subscriber received, in the same order per topic.
+    run.stop(gateway, signal.SIGTERM)
+    run.stop(logger)
+    logged = logger_by_topic(run.read_jsonl("logger.jsonl"))
+    _, missed = compare_topics(logged, file_by_topic(messages), "sigkill", settle_ns, prefix=True)
+    print(f"sigkill: file of {size} bytes; {len(messages)} messages readable, "
+          f"the same as the subscriber's first ones; --info says incomplete")
+
+
+def case_replay(run):
+    recording = run.path("run.mcap")
+    make_recording(run, "run.mcap")
+    messages, _ = run.read_mcap(recording)
+    # Commands are not replayed unless asked (a gateway in the domain would move its valves).
+    messages = [m for m in messages if m["topic"] != "teejet/valve/command"]
+    logger = run.start_logger("replayed", 1)
+    replay = run.run([run.binary("tools/teejet-replay/teejet-replay"), recording, "--domain", "1",
+                      "--wait-for-readers", "20"], timeout=120)
+    check(run.stop(logger) == 0, "the replay subscriber did not exit 0")
+    received = run.read_jsonl("replayed.jsonl")
+    _, missed = compare_topics(logger_by_topic(received), file_by_topic(messages), "replay")
+    check(missed == 0, f"replay: the subscriber missed {missed} sample(s)")
+    # Same order, same gaps: pair each file message with its received sample (the n-th of its
+    # instance).
+    seen = {}
+    pairs = []
+    by_instance = logger_by_topic(received)
+    for message in messages:
+        key = instance(message["topic"], message["data"])
+        index = seen.get(key, 0)
+        seen[key] = index + 1
+        pairs.append((int(message["log_time"]), int(by_instance[key][index]["received_ns"]),
+                      message["topic"]))
+    worst, where = 0, 0
+    for i in range(1, len(pairs)):
+        recorded_gap = pairs[i][0] - pairs[i - 1][0]
+        replayed_gap = pairs[i][1] - pairs[i - 1][1]
+        if abs(replayed_gap - recorded_gap) > worst:
+            worst, where = abs(replayed_gap - recorded_gap), i
+    check(worst <= GAP_TOLERANCE_NS,
+          f"replay: the gap before sample {where} of {len(pairs)} ({pairs[where][2]} after "
+          f"{pairs[where - 1][2]}) was {(pairs[where][1] - pairs[where - 1][1]) / 1e6:.3f} ms, "
+          f"recorded {(pairs[where][0] - pairs[where - 1][0]) / 1e6:.3f} ms (limit ±5 ms)")
+    span = (pairs[-1][0] - pairs[0][0]) / 1e9
+    print(f"replay: {len(pairs)} samples over {span:.3f} s in the recorded order, "
+          f"worst gap difference {worst / 1e6:.3f} ms (limit 5 ms)\n{replay.stderr.strip()}")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--build-dir", required=True)
+    parser.add_argument("--npm-reader", required=True)
+    parser.add_argument("case", choices=["record", "sigkill", "replay"])
+    args = parser.parse_args()
+    if subprocess.run(["node", "--version"], capture_output=True).returncode != 0 or \
+            not os.path.isdir(os.path.join(os.path.dirname(args.npm_reader), "node_modules")):
+        print("FAIL: node or the npm reader's packages are missing: run tools/install-deps.sh")
+        return 1
+    with tempfile.TemporaryDirectory(prefix="teejet-recording-") as work:
+        run = Run(args, work)
+        try:
+            {"record": case_record, "sigkill": case_sigkill, "replay": case_replay}[args.case](run)
+        except (Failure, subprocess.TimeoutExpired) as failure:
+            print(f"FAIL: {failure}")
+            for name in sorted(os.listdir(work)):
+                if name.endswith(".err"):
+                    with open(os.path.join(work, name), errors="replace") as f:
+                        tail = f.read()[-2000:]
+                    if tail.strip():
+                        print(f"--- {name}\n{tail}")
+            return 1
+        finally:
+            run.cleanup()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

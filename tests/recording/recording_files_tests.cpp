@@ -1,0 +1,245 @@
+// teejet-record's --info and teejet-replay on files a user might hand them: good ones, cut ones,
+// damaged ones and foreign ones. Each gets a clear answer naming the problem, never a crash.
+// Replay creates a DDS participant: this suite runs in a private network namespace.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fastdds/rtps/common/SerializedPayload.h>
+
+#include <atomic>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "info.hpp"
+#include "recorder.hpp"
+#include "replayer.hpp"
+#include "support/scratch_dir.hpp"
+#include "teejet/mcap/reader.hpp"
+#include "teejet/mcap/writer.hpp"
+#include "teejet/recording/catalog.hpp"
+#include "teejet/valvePubSubTypes.h"
+
+namespace teejet {
+namespace {
+
+using mcap::Bytes;
+using ::testing::HasSubstr;
+
+constexpr std::uint64_t kStart = 1'790'000'000'000'000'000ull;
+constexpr int kDomain = 37;
+
+Bytes position_payload(std::uint32_t serial, float degrees) {
+  ValvePosition sample;
+  sample.serial(serial);
+  sample.degrees(degrees);
+  sample.received_ns(kStart);
+  ValvePositionPubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&sample)());
+  EXPECT_TRUE(type.serialize(&sample, &payload));
+  return Bytes(payload.data, payload.data + payload.length);
+}
+
+struct FileSpec {
+  std::string schema = "teejet::ValvePosition";
+  std::string topic = "teejet/valve/position";
+  std::string compression;  // none: a flipped byte meets the CRC, not the decompressor
+  std::size_t chunk_size = 64;
+  int messages = 12;
+  Bytes payload_override;  // instead of a real sample
+};
+
+Bytes make_file(const FileSpec& spec) {
+  auto sink = std::make_unique<mcap::MemorySink>();
+  auto* memory = sink.get();
+  auto writer = mcap::Writer::create(std::move(sink), {.compression = spec.compression,
+                                                       .chunk_size = spec.chunk_size});
+  EXPECT_TRUE(writer.ok());
+  const auto idl = recording::valve_idl();
+  const auto schema = (*writer)->add_schema(
+      spec.schema, "omgidl", {reinterpret_cast<const std::uint8_t*>(idl.data()), idl.size()});
+  const auto channel = (*writer)->add_channel(*schema, spec.topic, "cdr",
+                                              {{"dds_topic", spec.topic}});
+  for (int i = 0; i < spec.messages; ++i) {
+    const Bytes payload = spec.payload_override.empty()
+                              ? position_payload(1, static_cast<float>(i))
+                              : spec.payload_override;
+    const std::uint64_t at = kStart + static_cast<std::uint64_t>(i) * 1'000'000;  // 1 ms apart
+    EXPECT_TRUE((*writer)->write(*channel, static_cast<std::uint32_t>(i + 1), at, at, payload).ok());
+  }
+  EXPECT_TRUE((*writer)->finish().ok());
+  return memory->bytes();
+}
+
+class RecordingFiles : public ::testing::Test {
+ protected:
+  std::string save(const std::string& name, const Bytes& bytes) {
+    const std::string path = (dir_.path() / name).string();
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    return path;
+  }
+
+  struct Info {
+    int status;
+    std::string out, err;
+  };
+  Info info(const std::string& path, bool json = false) {
+    std::ostringstream out, err;
+    const int status = record::print_info(path, json, out, err);
+    return {status, out.str(), err.str()};
+  }
+
+  Result<replay::ReplayReport> replay_file(const std::string& path) {
+    replay::ReplayOptions options;
+    options.file = path;
+    options.rate = 100;
+    options.wait_for_readers = std::chrono::milliseconds(0);
+    options.domain = kDomain;
+    std::atomic<bool> stop{false};
+    return replay::replay(options, stop);
+  }
+
+  testing::ScratchDir dir_;
+};
+
+TEST_F(RecordingFiles, AGoodFileIsDescribedAndReplayed) {
+  const auto path = save("good.mcap", make_file({}));
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 0) << described.err;
+  EXPECT_THAT(described.out, HasSubstr("complete:    yes"));
+  EXPECT_THAT(described.out, HasSubstr("messages:    12"));
+  EXPECT_THAT(described.out, HasSubstr("duration:    0.011 s"));
+  EXPECT_THAT(described.out, HasSubstr("teejet/valve/position"));
+  EXPECT_EQ(described.err, "");
+  const auto json = nlohmann::json::parse(info(path, true).out);
+  EXPECT_EQ(json["messages"], 12);
+  EXPECT_EQ(json["channels"][0]["schema"], "teejet::ValvePosition");
+  EXPECT_EQ(json["start_ns"], kStart);
+
+  const auto replayed = replay_file(path);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 12u);
+  EXPECT_EQ(replayed->failed, 0u);
+}
+
+TEST_F(RecordingFiles, ACutFileSaysWhereItEndsAndReplaysWhatIsThere) {
+  Bytes file = make_file({});
+  // Inside the ninth message: its chunk and everything after it are lost.
+  const Bytes ninth = position_payload(1, 8.0f);
+  const auto at = std::search(file.begin(), file.end(), ninth.begin(), ninth.end());
+  ASSERT_NE(at, file.end());
+  file.resize(static_cast<std::size_t>(at - file.begin()) + 4);
+  const auto path = save("cut.mcap", file);
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 0);
+  EXPECT_THAT(described.out, HasSubstr("complete:    no: "));
+  EXPECT_THAT(described.err, HasSubstr("incomplete"));
+  const auto replayed = replay_file(path);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_GE(replayed->published, 6u);
+  EXPECT_LE(replayed->published, 8u);
+}
+
+TEST_F(RecordingFiles, WrongMagicIsRefusedByName) {
+  Bytes file = make_file({});
+  file[1] = 'X';
+  const auto path = save("magic.mcap", file);
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 1);
+  EXPECT_EQ(described.err, "teejet-record: " + path + ": not an MCAP file: wrong magic bytes\n");
+  const auto replayed = replay_file(path);
+  ASSERT_FALSE(replayed.ok());
+  EXPECT_EQ(replayed.error().reason, path + ": not an MCAP file: wrong magic bytes");
+}
+
+TEST_F(RecordingFiles, AFlippedByteFailsTheChunkCrc) {
+  Bytes file = make_file({});
+  // The first message's degrees, inside the first chunk's records.
+  const Bytes sample = position_payload(1, 0.0f);
+  const auto at = std::search(file.begin(), file.end(), sample.begin(), sample.end());
+  ASSERT_NE(at, file.end());
+  at[8] ^= 0x40;
+  const auto path = save("crc.mcap", file);
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 1);
+  EXPECT_THAT(described.err, HasSubstr("a chunk's CRC does not match its records"));
+  const auto replayed = replay_file(path);
+  ASSERT_FALSE(replayed.ok());
+  EXPECT_THAT(replayed.error().reason, HasSubstr("a chunk's CRC does not match its records"));
+}
+
+TEST_F(RecordingFiles, AForeignTopicIsListedButNotReplayed) {
+  const auto path = save("foreign.mcap", make_file({.schema = "acme::Thing", .topic = "acme/thing"}));
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 0);
+  EXPECT_THAT(described.out, HasSubstr("acme::Thing"));
+  const auto replayed = replay_file(path);
+  ASSERT_FALSE(replayed.ok());
+  EXPECT_EQ(replayed.error().reason,
+            path + ": channel 0 'acme/thing': 'acme/thing' is not a teejet topic");
+}
+
+TEST_F(RecordingFiles, ATeejetTopicWithAnotherSchemaIsRefused) {
+  const auto path = save("schema.mcap", make_file({.schema = "teejet::ValveVoltage"}));
+  const auto replayed = replay_file(path);
+  ASSERT_FALSE(replayed.ok());
+  EXPECT_EQ(replayed.error().reason,
+            path + ": channel 0 'teejet/valve/position': schema 'teejet::ValveVoltage' (omgidl) "
+                   "is not the one this replayer knows for teejet/valve/position: "
+                   "'teejet::ValvePosition' (omgidl)");
+}
+
+TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
+  const auto path = save("payload.mcap", make_file({.messages = 3, .payload_override = {0, 1, 0, 0, 7}}));
+  const auto replayed = replay_file(path);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 0u);
+  EXPECT_EQ(replayed->failed, 3u);
+  EXPECT_EQ(replayed->last_failure,
+            "teejet/valve/position #3: a 5-byte payload is not a CDR teejet::ValvePosition");
+}
+
+TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
+  const auto empty = save("empty.mcap", {});
+  EXPECT_EQ(info(empty).err, "teejet-record: " + empty + ": not an MCAP file: shorter than its magic bytes\n");
+  const auto missing = (dir_.path() / "missing.mcap").string();
+  EXPECT_EQ(info(missing).status, 1);
+  EXPECT_EQ(info(missing).err,
+            "teejet-record: " + missing + ": " + missing + ": cannot open: No such file or directory\n");
+  ASSERT_FALSE(replay_file(missing).ok());
+}
+
+TEST(RecordingTopics, GlobsSelectCatalogTopicsAndRefuseStrays) {
+  EXPECT_EQ(record::select_topics({})->size(), 16u);
+  const auto valves = record::select_topics({"teejet/valve/*"});
+  ASSERT_TRUE(valves.ok());
+  EXPECT_EQ(valves->size(), 14u);
+  EXPECT_EQ(valves->front(), "teejet/valve/presence");
+  EXPECT_EQ(*record::select_topics({"*frame", "teejet/gateway/status"}),
+            (std::vector<std::string>{"teejet/gateway/status", "teejet/can/frame"}));
+  const auto stray = record::select_topics({"teejet/valve/postion"});
+  ASSERT_FALSE(stray.ok());
+  EXPECT_THAT(stray.error().reason,
+              HasSubstr("--topic 'teejet/valve/postion' matches none of the teejet topics:\n"
+                        "  teejet/valve/presence\n  teejet/valve/position\n"));
+}
+
+TEST(RecordingTopics, SplitFilesAreNumberedBeforeTheExtension) {
+  EXPECT_EQ(record::split_file_name("run.mcap", 0), "run_000.mcap");
+  EXPECT_EQ(record::split_file_name("logs.d/run", 12), "logs.d/run_012");
+  EXPECT_EQ(record::split_file_name("/tmp/a.b/run.x.mcap", 3), "/tmp/a.b/run.x_003.mcap");
+}
+
+TEST(RecordingTopics, EverySchemaIsATypeOfTheBuiltInIdl) {
+  const std::string idl(recording::valve_idl());
+  for (const auto& type : recording::topic_types()) {
+    const std::string name = type.type_name.substr(std::string("teejet::").size());
+    EXPECT_NE(idl.find("struct " + name + " {"), std::string::npos) << type.type_name;
+    EXPECT_EQ(recording::find_topic(type.topic), &type);
+  }
+  EXPECT_EQ(recording::find_topic("teejet/valve/nothing"), nullptr);
+}
+
+}  // namespace
+}  // namespace teejet

@@ -1,0 +1,255 @@
+#include "teejet/recording/catalog.hpp"
+
+#include <fnmatch.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/rtps/common/SerializedPayload.h>
+
+#include "teejet/dds/topics.hpp"
+
+namespace teejet::recording {
+namespace {
+
+using namespace eprosima::fastdds::dds;
+using eprosima::fastrtps::rtps::SerializedPayload_t;
+
+// How the recorder's reader and the replayer's writer of a topic are set up.
+enum class Kind {
+  kState,          // RELIABLE, TRANSIENT_LOCAL: a late recorder gets every instance's value
+  kCommandStatus,  // RELIABLE, TRANSIENT_LOCAL, 32 per valve
+  kCommand,        // RELIABLE, VOLATILE: a command writer keeps nothing for late readers
+  kFrame,          // BEST_EFFORT, VOLATILE
+};
+
+// The recorder's readers keep this many samples per instance that it has not taken yet: a
+// state writer keeps only the last, but a recorder must not lose the one before it while it
+// writes a chunk. Bounded, so that a stalled recorder cannot eat memory without limit.
+constexpr std::int32_t kRecorderDepth = 64;
+constexpr std::int32_t kRecorderFrameDepth = 4096;
+
+DataReaderQos recorder_qos(Kind kind) {
+  DataReaderQos qos;
+  switch (kind) {
+    case Kind::kState:
+      qos = dds::topics::state_reader_qos();
+      break;
+    case Kind::kCommandStatus:
+      qos = dds::topics::status_reader_qos();
+      break;
+    case Kind::kCommand:
+      // Not the gateway's KEEP_ALL command reader: a recorder that falls behind loses its own
+      // oldest commands, never holds back a commander (a KEEP_LAST reader always accepts).
+      qos = dds::topics::state_reader_qos();
+      qos.durability().kind = VOLATILE_DURABILITY_QOS;
+      break;
+    case Kind::kFrame:
+      qos = dds::topics::state_reader_qos();
+      qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+      qos.durability().kind = VOLATILE_DURABILITY_QOS;
+      break;
+  }
+  const std::int32_t depth = kind == Kind::kFrame ? kRecorderFrameDepth : kRecorderDepth;
+  qos.history().kind = KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = std::max(qos.history().depth, depth);
+  qos.resource_limits().max_samples_per_instance = qos.history().depth;
+  qos.resource_limits().max_samples =
+      qos.resource_limits().max_instances * qos.history().depth;
+  return qos;
+}
+
+DataWriterQos replayer_qos(Kind kind) {
+  switch (kind) {
+    case Kind::kState:
+      return dds::topics::state_writer_qos();
+    case Kind::kCommandStatus:
+      return dds::topics::status_writer_qos();
+    case Kind::kCommand:
+      return dds::topics::command_writer_qos();
+    case Kind::kFrame: {
+      auto qos = dds::topics::state_writer_qos();
+      qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+      qos.durability().kind = VOLATILE_DURABILITY_QOS;
+      qos.history().depth = kRecorderFrameDepth;
+      qos.resource_limits().max_samples_per_instance = kRecorderFrameDepth;
+      qos.resource_limits().max_samples = kRecorderFrameDepth;
+      return qos;
+    }
+  }
+  return {};
+}
+
+std::uint64_t to_ns(const eprosima::fastrtps::rtps::Time_t& time) {
+  const auto ns = time.to_ns();
+  return ns > 0 ? static_cast<std::uint64_t>(ns) : 0;
+}
+
+eprosima::fastrtps::Time_t from_ns(std::uint64_t ns) {
+  return eprosima::fastrtps::Time_t(static_cast<std::int32_t>(ns / 1'000'000'000),
+                                    static_cast<std::uint32_t>(ns % 1'000'000'000));
+}
+
+Error dds_error(const std::string& what, const ReturnCode_t& code) {
+  return Error{ErrorCode::kDds, what + " (Fast DDS return code " +
+                                    std::to_string(static_cast<int>(code())) + ")"};
+}
+
+template <class Sample>
+class TypedReader final : public TopicReader {
+ public:
+  explicit TypedReader(DataReader* reader) : reader_(reader) {}
+
+  void take(std::vector<TakenSample>& out) override {
+    Sample sample;
+    SampleInfo info;
+    while (reader_->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
+      TakenSample taken;
+      taken.received_ns = to_ns(info.reception_timestamp);
+      taken.source_ns = to_ns(info.source_timestamp);
+      std::memcpy(taken.instance.data(), info.instance_handle.value, taken.instance.size());
+      if (info.valid_data) {
+        SerializedPayload_t payload(type_.getSerializedSizeProvider(&sample)());
+        if (!type_.serialize(&sample, &payload)) continue;  // cannot happen for a taken sample
+        taken.payload.assign(payload.data, payload.data + payload.length);
+      } else if (info.instance_state == NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
+        taken.disposed = true;
+      } else {
+        continue;  // a writer left: nothing happened to the valve
+      }
+      out.push_back(std::move(taken));
+    }
+  }
+
+  DataReader* reader() const override { return reader_; }
+
+ private:
+  DataReader* reader_;
+  typename dds::topics::TopicOf<Sample>::PubSubType type_;
+};
+
+template <class Sample>
+class TypedWriter final : public TopicWriter {
+ public:
+  explicit TypedWriter(DataWriter* writer) : writer_(writer) {}
+
+  Status write(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
+    Sample sample;
+    if (auto parsed = parse(payload, sample); !parsed) return parsed;
+    const auto code = writer_->write_w_timestamp(&sample, HANDLE_NIL, from_ns(source_ns));
+    if (code != ReturnCode_t::RETCODE_OK) return dds_error("write refused", code);
+    return {};
+  }
+
+  Status dispose(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
+    Sample sample;
+    if (auto parsed = parse(payload, sample); !parsed) return parsed;
+    const auto code = writer_->dispose_w_timestamp(&sample, HANDLE_NIL, from_ns(source_ns));
+    if (code != ReturnCode_t::RETCODE_OK) return dds_error("dispose refused", code);
+    return {};
+  }
+
+  int matched_readers() const override {
+    PublicationMatchedStatus status;
+    writer_->get_publication_matched_status(status);
+    return status.current_count;
+  }
+
+  bool wait_for_acknowledgments(std::chrono::milliseconds timeout) override {
+    const auto ms = timeout.count();
+    return writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+               static_cast<std::int32_t>(ms / 1000),
+               static_cast<std::uint32_t>(ms % 1000 * 1'000'000))) == ReturnCode_t::RETCODE_OK;
+  }
+
+ private:
+  Status parse(std::span<const std::uint8_t> bytes, Sample& sample) {
+    SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
+    if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());
+    payload.length = static_cast<std::uint32_t>(bytes.size());
+    // fastcdr throws on a payload that ends early; the type support turns that into false.
+    if (bytes.size() < 4 || !type_.deserialize(&payload, &sample)) {
+      return Error{ErrorCode::kInvalidValue,
+                   "a " + std::to_string(bytes.size()) + "-byte payload is not a CDR " +
+                       std::string(type_.getName())};
+    }
+    return {};
+  }
+
+  DataWriter* writer_;
+  typename dds::topics::TopicOf<Sample>::PubSubType type_;
+};
+
+template <class Sample>
+Result<std::unique_ptr<TopicReader>> open_reader(dds::Participant& participant, Kind kind) {
+  using Topic = dds::topics::TopicOf<Sample>;
+  auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+  if (!topic) return topic.error();
+  // No listener: the recorder waits on the readers' status conditions.
+  auto reader = participant.reader(*topic, recorder_qos(kind), nullptr, StatusMask::none());
+  if (!reader) return reader.error();
+  return std::unique_ptr<TopicReader>(std::make_unique<TypedReader<Sample>>(*reader));
+}
+
+template <class Sample>
+Result<std::unique_ptr<TopicWriter>> open_writer(dds::Participant& participant, Kind kind) {
+  using Topic = dds::topics::TopicOf<Sample>;
+  auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+  if (!topic) return topic.error();
+  auto writer = participant.writer(*topic, replayer_qos(kind));
+  if (!writer) return writer.error();
+  return std::unique_ptr<TopicWriter>(std::make_unique<TypedWriter<Sample>>(*writer));
+}
+
+template <class Sample, Kind kKind>
+TopicType entry(const char* type_name, bool keyed = true) {
+  return TopicType{
+      .topic = dds::topics::TopicOf<Sample>::kName,
+      .type_name = type_name,
+      .keyed = keyed,
+      .open_reader = [](dds::Participant& participant) {
+        return open_reader<Sample>(participant, kKind);
+      },
+      .open_writer = [](dds::Participant& participant) {
+        return open_writer<Sample>(participant, kKind);
+      }};
+}
+
+}  // namespace
+
+const std::vector<TopicType>& topic_types() {
+  static const std::vector<TopicType> kTypes = {
+      entry<ValvePresence, Kind::kState>("teejet::ValvePresence"),
+      entry<ValvePosition, Kind::kState>("teejet::ValvePosition"),
+      entry<ValveVersion, Kind::kState>("teejet::ValveVersion"),
+      entry<ValveTemperature, Kind::kState>("teejet::ValveTemperature"),
+      entry<ValveVoltage, Kind::kState>("teejet::ValveVoltage"),
+      entry<ValveCurrent, Kind::kState>("teejet::ValveCurrent"),
+      entry<ValveDegreesPerSecond, Kind::kState>("teejet::ValveDegreesPerSecond"),
+      entry<ValveSpeedDirection, Kind::kState>("teejet::ValveSpeedDirection"),
+      entry<ValveRunTime, Kind::kState>("teejet::ValveRunTime"),
+      entry<ValveCycleCount, Kind::kState>("teejet::ValveCycleCount"),
+      entry<ValveBaudRate, Kind::kState>("teejet::ValveBaudRate"),
+      entry<ValveError, Kind::kState>("teejet::ValveError"),
+      entry<ValveCommand, Kind::kCommand>("teejet::ValveCommand"),
+      entry<CommandStatus, Kind::kCommandStatus>("teejet::CommandStatus"),
+      entry<GatewayStatus, Kind::kState>("teejet::GatewayStatus"),
+      entry<BusFrame, Kind::kFrame>("teejet::BusFrame", /*keyed=*/false),
+  };
+  return kTypes;
+}
+
+const TopicType* find_topic(std::string_view topic) {
+  const auto& types = topic_types();
+  const auto found = std::find_if(types.begin(), types.end(),
+                                  [&](const TopicType& type) { return type.topic == topic; });
+  return found == types.end() ? nullptr : &*found;
+}
+
+bool topic_matches(std::string_view glob, std::string_view topic) {
+  return ::fnmatch(std::string(glob).c_str(), std::string(topic).c_str(), 0) == 0;
+}
+
+}  // namespace teejet::recording

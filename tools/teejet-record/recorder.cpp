@@ -1,0 +1,395 @@
+#include "recorder.hpp"
+
+#include <fastdds/dds/core/condition/StatusCondition.hpp>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+#include "teejet/dds/participant.hpp"
+#include "teejet/mcap/writer.hpp"
+#include "teejet/recording/catalog.hpp"
+#include "teejet/recording/frames.hpp"
+
+namespace teejet::record {
+namespace {
+
+using namespace std::chrono_literals;
+using recording::TakenSample;
+using recording::TopicType;
+
+// Longest wait between looks at the clock and the stop flag.
+constexpr Duration kLongestWait = 100ms;
+constexpr Duration kReportPeriod = 1s;
+// Samples are written in the order they were received (log time), across topics. A sample is
+// taken a little after its reception time, and one topic's reader may be taken later than
+// another's (measured: up to 10 ms on a busy 2-core machine), so samples wait this long before
+// they are written, and go out sorted.
+constexpr std::uint64_t kReorderWindowNs = 100'000'000;
+
+std::uint64_t now_ns() {
+  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::system_clock::now().time_since_epoch())
+                                        .count());
+}
+
+struct Subscription {
+  const TopicType* type;
+  std::unique_ptr<recording::TopicReader> reader;
+};
+
+// The last sample of each instance, per topic: what a disposal's channel shows (a disposal
+// itself carries no key on Fast DDS 2.9, whose DataReader::get_key_value is unsupported), and
+// what each new file of a split recording starts with.
+struct LastSample {
+  std::uint64_t source_ns = 0;
+  std::vector<std::uint8_t> payload;
+};
+using LastSamples = std::map<std::pair<std::size_t, recording::InstanceHandle>, LastSample>;
+
+// One MCAP file of the recording with a channel per subscribed topic.
+class RecordingFile {
+ public:
+  static Result<std::unique_ptr<RecordingFile>> open(const std::string& path,
+                                                     const RecorderOptions& options,
+                                                     const std::vector<Subscription>& topics) {
+    auto sink = mcap::open_file_sink(path);
+    if (!sink) return sink.error();
+    auto writer = mcap::Writer::create(
+        std::move(*sink), {.compression = options.compression,
+                           .chunk_size = options.chunk_size,
+                           .library = "teejet-record " TEEJET_VERSION});
+    if (!writer) return writer.error();
+    auto file = std::unique_ptr<RecordingFile>(new RecordingFile(path, std::move(*writer)));
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      auto channel = file->add_channel(*topics[i].type, /*disposed=*/false);
+      if (!channel) return channel.error();
+      file->channels_[{i, false}] = *channel;
+    }
+    return file;
+  }
+
+  Status write(std::size_t topic, const TopicType& type, bool disposed, std::uint64_t log_time,
+               std::uint64_t publish_time, std::span<const std::uint8_t> payload) {
+    auto channel = channels_.find({topic, disposed});
+    if (channel == channels_.end()) {
+      auto added = add_channel(type, disposed);
+      if (!added) return added.error();
+      channel = channels_.emplace(std::pair{topic, disposed}, *added).first;
+    }
+    return writer_->write(channel->second, ++sequences_[channel->second], log_time, publish_time,
+                          payload);
+  }
+
+  Status flush() { return writer_->flush(); }
+  Status finish() { return writer_->finish(); }
+  std::uint64_t bytes() const { return writer_->bytes_written(); }
+  const std::string& path() const { return path_; }
+
+ private:
+  RecordingFile(std::string path, std::unique_ptr<mcap::Writer> writer)
+      : path_(std::move(path)), writer_(std::move(writer)) {}
+
+  Result<std::uint16_t> add_channel(const TopicType& type, bool disposed) {
+    auto schema = schemas_.find(type.type_name);
+    if (schema == schemas_.end()) {
+      const auto idl = recording::valve_idl();
+      auto added = writer_->add_schema(
+          type.type_name, recording::kSchemaEncoding,
+          {reinterpret_cast<const std::uint8_t*>(idl.data()), idl.size()});
+      if (!added) return added.error();
+      schema = schemas_.emplace(type.type_name, *added).first;
+    }
+    std::map<std::string, std::string> metadata{{recording::kDdsTopicKey, type.topic}};
+    std::string topic = type.topic;
+    if (disposed) {
+      topic += recording::kDisposedSuffix;
+      metadata[recording::kInstanceStateKey] = recording::kDisposed;
+    }
+    return writer_->add_channel(schema->second, topic, recording::kMessageEncoding, metadata);
+  }
+
+  std::string path_;
+  std::unique_ptr<mcap::Writer> writer_;
+  std::map<std::string, std::uint16_t> schemas_;
+  std::map<std::pair<std::size_t, bool>, std::uint16_t> channels_;
+  std::map<std::uint16_t, std::uint32_t> sequences_;
+};
+
+class CandumpFile {
+ public:
+  static Result<std::unique_ptr<CandumpFile>> open(const std::string& path) {
+    auto file = std::unique_ptr<CandumpFile>(new CandumpFile(path));
+    if (!file->out_) {
+      return Error{ErrorCode::kSystem, "cannot create '" + path + "': " + std::strerror(errno)};
+    }
+    return file;
+  }
+  Status write(std::span<const std::uint8_t> payload) {
+    auto line = recording::candump_line(payload);
+    if (!line) {
+      ++malformed_;
+      return {};
+    }
+    out_ << *line << '\n';
+    return {};
+  }
+  Status flush() {
+    out_.flush();
+    if (!out_) return Error{ErrorCode::kSystem, "cannot write '" + path_ + "'"};
+    return {};
+  }
+
+ private:
+  explicit CandumpFile(const std::string& path) : path_(path), out_(path) {}
+  std::string path_;
+  std::ofstream out_;
+  std::uint64_t malformed_ = 0;
+};
+
+class Recording {
+ public:
+  Recording(const RecorderOptions& options, std::vector<Subscription>& topics)
+      : options_(options), topics_(topics) {}
+
+  Status start() {
+    if (!options_.candump_path.empty()) {
+      auto candump = CandumpFile::open(options_.candump_path);
+      if (!candump) return candump.error();
+      candump_ = std::move(*candump);
+    }
+    return open_next();
+  }
+
+  Status write(std::size_t topic, TakenSample& sample) {
+    const TopicType& type = *topics_[topic].type;
+    const std::uint64_t log_time = sample.received_ns;
+    const std::uint64_t publish_time = sample.source_ns != 0 ? sample.source_ns : log_time;
+    const auto key = std::pair{topic, sample.instance};
+    if (sample.disposed) {
+      const auto last = last_samples_.find(key);
+      if (last == last_samples_.end()) {
+        ++progress_.unknown_disposals;
+        return {};
+      }
+      sample.payload = std::move(last->second.payload);
+      last_samples_.erase(last);
+    } else if (type.keyed) {
+      last_samples_[key] = LastSample{publish_time, sample.payload};
+    }
+    if (auto written = file_->write(topic, type, sample.disposed, log_time, publish_time,
+                                    sample.payload);
+        !written) {
+      return written;
+    }
+    if (candump_ && !sample.disposed && type.topic == recording::kFrameTopic) {
+      if (auto written = candump_->write(sample.payload); !written) return written;
+    }
+    auto& tally =
+        progress_.topics[sample.disposed ? type.topic + std::string(recording::kDisposedSuffix)
+                                         : type.topic];
+    ++tally.messages;
+    tally.bytes += sample.payload.size();
+    ++progress_.messages;
+    if (options_.max_size != 0 && file_->bytes() >= options_.max_size) return split();
+    return {};
+  }
+
+  Status flush() {
+    if (candump_) {
+      if (auto flushed = candump_->flush(); !flushed) return flushed;
+    }
+    return file_->flush();
+  }
+
+  Status finish() {
+    Status finished = file_ ? file_->finish() : Status{};
+    if (candump_) {
+      if (auto flushed = candump_->flush(); !flushed && finished) finished = flushed;
+    }
+    if (file_) closed_bytes_ += file_->bytes();
+    file_.reset();
+    return finished;
+  }
+
+  Progress& progress() {
+    progress_.file_bytes = closed_bytes_ + (file_ ? file_->bytes() : 0);
+    return progress_;
+  }
+
+ private:
+  // A new file starts with the last sample of every instance, so that it stands alone: its
+  // log time is the split, its publish time the sample's own.
+  Status split() {
+    if (auto finished = file_->finish(); !finished) return finished;
+    closed_bytes_ += file_->bytes();
+    if (auto opened = open_next(); !opened) return opened;
+    const std::uint64_t now = now_ns();
+    for (const auto& [key, last] : last_samples_) {
+      if (auto written = file_->write(key.first, *topics_[key.first].type, false, now,
+                                      last.source_ns, last.payload);
+          !written) {
+        return written;
+      }
+    }
+    return {};
+  }
+
+  Status open_next() {
+    const std::string path = options_.max_size == 0
+                                 ? options_.output
+                                 : split_file_name(options_.output, file_index_++);
+    auto file = RecordingFile::open(path, options_, topics_);
+    if (!file) return file.error();
+    file_ = std::move(*file);
+    progress_.files.push_back(path);
+    return {};
+  }
+
+  const RecorderOptions& options_;
+  std::vector<Subscription>& topics_;
+  std::unique_ptr<RecordingFile> file_;
+  std::unique_ptr<CandumpFile> candump_;
+  int file_index_ = 0;
+  std::uint64_t closed_bytes_ = 0;
+  LastSamples last_samples_;
+  Progress progress_;
+};
+
+}  // namespace
+
+Result<std::vector<std::string>> select_topics(const std::vector<std::string>& globs) {
+  std::vector<std::string> selected;
+  for (const auto& glob : globs) {
+    const bool any = std::any_of(
+        recording::topic_types().begin(), recording::topic_types().end(),
+        [&](const TopicType& type) { return recording::topic_matches(glob, type.topic); });
+    if (!any) {
+      std::string known;
+      for (const auto& type : recording::topic_types()) known += "\n  " + type.topic;
+      return Error{ErrorCode::kInvalidValue,
+                   "--topic '" + glob + "' matches none of the teejet topics:" + known};
+    }
+  }
+  for (const auto& type : recording::topic_types()) {
+    const bool wanted =
+        globs.empty() || std::any_of(globs.begin(), globs.end(), [&](const std::string& glob) {
+          return recording::topic_matches(glob, type.topic);
+        });
+    if (wanted) selected.push_back(type.topic);
+  }
+  return selected;
+}
+
+std::string split_file_name(const std::string& output, int index) {
+  const auto slash = output.find_last_of('/');
+  const auto dot = output.find_last_of('.');
+  const bool has_extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  char number[16];
+  std::snprintf(number, sizeof number, "_%03d", index);
+  return has_extension ? output.substr(0, dot) + number + output.substr(dot)
+                       : output + number;
+}
+
+Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>& stop,
+                        const std::function<void(const Progress&)>& report,
+                        const std::function<void()>& on_started) {
+  auto selected = select_topics(options.topics);
+  if (!selected) return selected.error();
+  auto participant = dds::Participant::create(
+      {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
+  if (!participant) return participant.error();
+
+  std::vector<Subscription> topics;
+  eprosima::fastdds::dds::WaitSet wait_set;
+  for (const auto& name : *selected) {
+    const TopicType* type = recording::find_topic(name);
+    auto reader = type->open_reader(**participant);
+    if (!reader) return reader.error();
+    auto& condition = (*reader)->reader()->get_statuscondition();
+    condition.set_enabled_statuses(eprosima::fastdds::dds::StatusMask::data_available());
+    wait_set.attach_condition(condition);
+    topics.push_back({type, std::move(*reader)});
+  }
+
+  Recording recording(options, topics);
+  if (auto started = recording.start(); !started) {
+    (void)recording.finish();  // the reason to report is the first one
+    return started.error();
+  }
+  if (on_started) on_started();
+
+  const SteadyTime start = std::chrono::steady_clock::now();
+  // Without --duration, the end is the stop flag alone.
+  const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
+  SteadyTime next_flush = start + options.flush_period;
+  SteadyTime next_report = start + kReportPeriod;
+  // Taken, not yet written: ordered by reception time (then by the order taken).
+  std::multimap<std::uint64_t, std::pair<std::size_t, TakenSample>> pending;
+  std::vector<TakenSample> taken;
+  Status failed;
+  const auto write_pending = [&](std::uint64_t up_to) {
+    while (failed && !pending.empty() && pending.begin()->first <= up_to) {
+      auto [topic, sample] = std::move(pending.begin()->second);
+      pending.erase(pending.begin());
+      failed = recording.write(topic, sample);
+    }
+  };
+  while (failed && !stop.load()) {
+    SteadyTime now = std::chrono::steady_clock::now();
+    if (now >= end) break;
+    const SteadyTime wake = std::min({end, now + kLongestWait, next_flush, next_report});
+    eprosima::fastdds::dds::ConditionSeq active;
+    const auto wait = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::max(wake - now, Duration{0}));
+    wait_set.wait(active, eprosima::fastrtps::Duration_t(
+                              static_cast<std::int32_t>(wait.count() / 1'000'000'000),
+                              static_cast<std::uint32_t>(wait.count() % 1'000'000'000)));
+    const std::uint64_t taken_at = now_ns();
+    for (std::size_t i = 0; i < topics.size(); ++i) {
+      taken.clear();
+      topics[i].reader->take(taken);
+      for (auto& sample : taken) {
+        if (sample.received_ns == 0) sample.received_ns = taken_at;
+        pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
+      }
+    }
+    write_pending(taken_at - kReorderWindowNs);
+    now = std::chrono::steady_clock::now();
+    if (failed && now >= next_flush) {
+      failed = recording.flush();
+      next_flush = now + options.flush_period;
+    }
+    if (now >= next_report) {
+      auto& progress = recording.progress();
+      progress.elapsed = now - start;
+      if (report) report(progress);
+      next_report = now + kReportPeriod;
+    }
+  }
+  // What the readers still hold, then everything taken.
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    taken.clear();
+    topics[i].reader->take(taken);
+    for (auto& sample : taken) {
+      if (sample.received_ns == 0) sample.received_ns = now_ns();
+      pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
+    }
+  }
+  write_pending(UINT64_MAX);
+  // Readers first: nothing arrives while the file is closed.
+  topics.clear();
+  participant->reset();
+  const Status finished = recording.finish();
+  auto& progress = recording.progress();
+  progress.elapsed = std::chrono::steady_clock::now() - start;
+  if (report) report(progress);
+  if (!failed) return failed.error();
+  if (!finished) return finished.error();
+  return progress;
+}
+
+}  // namespace teejet::record

@@ -1,0 +1,165 @@
+#include "replayer.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
+#include "teejet/mcap/reader.hpp"
+#include "teejet/recording/catalog.hpp"
+
+namespace teejet::replay {
+namespace {
+
+using namespace std::chrono_literals;
+using recording::TopicType;
+
+constexpr Duration kStopCheck = 100ms;
+
+struct Route {
+  recording::TopicWriter* writer = nullptr;  // null: this channel is not replayed
+  bool disposed = false;
+  std::string topic;
+};
+
+std::string dds_topic_of(const mcap::Channel& channel) {
+  const auto named = channel.metadata.find(recording::kDdsTopicKey);
+  return named != channel.metadata.end() ? named->second : channel.topic;
+}
+
+bool is_disposal(const mcap::Channel& channel) {
+  const auto state = channel.metadata.find(recording::kInstanceStateKey);
+  return state != channel.metadata.end() && state->second == recording::kDisposed;
+}
+
+bool selected(const ReplayOptions& options, const std::string& topic) {
+  if (topic == dds::topics::kCommand && !options.with_commands) return false;
+  return options.topics.empty() ||
+         std::any_of(options.topics.begin(), options.topics.end(),
+                     [&](const std::string& glob) { return recording::topic_matches(glob, topic); });
+}
+
+// Every channel of the file checked against the catalog before anything is published.
+Status check_channel(const mcap::Channel& channel, const std::map<std::uint16_t, mcap::Schema>& schemas) {
+  const std::string where = "channel " + std::to_string(channel.id) + " '" + channel.topic + "'";
+  if (channel.message_encoding != recording::kMessageEncoding) {
+    return Error{ErrorCode::kInvalidValue, where + ": message encoding '" +
+                                               channel.message_encoding + "', not 'cdr'"};
+  }
+  const auto schema = schemas.find(channel.schema_id);
+  if (schema == schemas.end()) {
+    return Error{ErrorCode::kInvalidValue, where + ": no schema"};
+  }
+  const std::string topic = dds_topic_of(channel);
+  const TopicType* type = recording::find_topic(topic);
+  if (type == nullptr) {
+    return Error{ErrorCode::kInvalidValue, where + ": '" + topic + "' is not a teejet topic"};
+  }
+  if (schema->second.name != type->type_name || schema->second.encoding != recording::kSchemaEncoding) {
+    return Error{ErrorCode::kInvalidValue,
+                 where + ": schema '" + schema->second.name + "' (" + schema->second.encoding +
+                     ") is not the one this replayer knows for " + topic + ": '" +
+                     type->type_name + "' (omgidl)"};
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
+  auto bytes = mcap::load_file(options.file);
+  if (!bytes) return bytes.error();
+  // The first pass checks the file and finds its channels and first time.
+  std::uint64_t first_time = UINT64_MAX;
+  auto contents = mcap::read_messages(*bytes, [&](const mcap::Channel&, const mcap::Message& message) {
+    first_time = std::min(first_time, message.log_time);
+  });
+  if (!contents) return Error{contents.error().code, options.file + ": " + contents.error().reason};
+  if (!contents->incomplete.empty()) {
+    // Still replayable: a killed recorder's file up to its last complete chunk.
+    std::fprintf(stderr, "teejet-replay: %s: %s; replaying what is there\n", options.file.c_str(),
+                 contents->incomplete.c_str());
+  }
+  for (const auto& [id, channel] : contents->channels) {
+    if (!selected(options, dds_topic_of(channel))) continue;
+    if (auto checked = check_channel(channel, contents->schemas); !checked) {
+      return Error{checked.error().code, options.file + ": " + checked.error().reason};
+    }
+  }
+
+  auto participant = dds::Participant::create(
+      {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-replay"});
+  if (!participant) return participant.error();
+  std::map<std::string, std::unique_ptr<recording::TopicWriter>> writers;
+  std::map<std::uint16_t, Route> routes;
+  for (const auto& [id, channel] : contents->channels) {
+    const std::string topic = dds_topic_of(channel);
+    if (!selected(options, topic)) continue;
+    auto& writer = writers[topic];
+    if (!writer) {
+      auto opened = recording::find_topic(topic)->open_writer(**participant);
+      if (!opened) return opened.error();
+      writer = std::move(*opened);
+    }
+    routes[id] = Route{writer.get(), is_disposal(channel), channel.topic};
+  }
+
+  ReplayReport report;
+  if (routes.empty()) {
+    return Error{ErrorCode::kInvalidValue, options.file + ": no channel to replay" +
+                                               (options.topics.empty() ? std::string()
+                                                                       : " matches --topic")};
+  }
+  const SteadyTime give_up = std::chrono::steady_clock::now() + options.wait_for_readers;
+  while (!stop && std::chrono::steady_clock::now() < give_up &&
+         !std::all_of(writers.begin(), writers.end(),
+                      [](const auto& entry) { return entry.second->matched_readers() > 0; })) {
+    std::this_thread::sleep_for(10ms);
+  }
+
+  const std::uint64_t start_ns = first_time + static_cast<std::uint64_t>(options.start.count());
+  const std::uint64_t end_ns =
+      options.end ? first_time + static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
+  do {
+    const SteadyTime wall_start = std::chrono::steady_clock::now();
+    auto pass = mcap::read_messages(*bytes, [&](const mcap::Channel& channel,
+                                                const mcap::Message& message) {
+      if (stop) return;
+      const auto route = routes.find(channel.id);
+      if (route == routes.end() || message.log_time < start_ns || message.log_time > end_ns) {
+        return;
+      }
+      const auto offset = std::chrono::duration<double, std::nano>(
+          static_cast<double>(message.log_time - start_ns) / options.rate);
+      const SteadyTime due = wall_start + std::chrono::duration_cast<Duration>(offset);
+      // Sleep in slices, so that a signal is noticed during a long gap.
+      for (SteadyTime now = std::chrono::steady_clock::now(); now < due && !stop;
+           now = std::chrono::steady_clock::now()) {
+        std::this_thread::sleep_until(std::min(due, now + kStopCheck));
+      }
+      if (stop) return;
+      report.worst_lateness = std::max(report.worst_lateness,
+                                       Duration(std::chrono::steady_clock::now() - due));
+      const auto& [writer, disposed, topic] = route->second;
+      const Status published = disposed ? writer->dispose(message.data, message.publish_time)
+                                        : writer->write(message.data, message.publish_time);
+      if (!published) {
+        ++report.failed;
+        report.last_failure = topic + " #" + std::to_string(message.sequence) + ": " +
+                              published.error().reason;
+        return;
+      }
+      ++report.published;
+      ++report.per_topic[topic];
+    });
+    if (!pass) return pass.error();
+    ++report.loops;
+  } while (options.loop && !stop);
+  // Reliable readers get the last messages before the writers go.
+  for (auto& [topic, writer] : writers) (void)writer->wait_for_acknowledgments(2000ms);
+  return report;
+}
+
+}  // namespace teejet::replay

@@ -1,0 +1,46 @@
+#pragma once
+
+// teejet-replay's work: a recording's channels as DDS writers, and its messages published again
+// with the gaps they were received with (scaled by the rate), each with its recorded source
+// timestamp. The caller's thread does it all.
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "teejet/core/result.hpp"
+#include "teejet/core/time.hpp"
+
+namespace teejet::replay {
+
+struct ReplayOptions {
+  std::string file;
+  double rate = 1.0;  // 2: twice as fast
+  bool loop = false;
+  std::vector<std::string> topics;  // globs on the DDS topic; empty: every teejet topic
+  bool with_commands = false;       // teejet/valve/command moves real valves: only when asked
+  Duration start{};                 // offsets from the recording's first message
+  std::optional<Duration> end;
+  // Before the first message: wait until every replayed topic has a reader, at most this long.
+  Duration wait_for_readers = std::chrono::seconds(1);
+  int domain = 0;
+  std::string profile_file;
+};
+
+struct ReplayReport {
+  std::uint64_t published = 0;
+  std::uint64_t failed = 0;  // writes or disposals the middleware refused
+  std::map<std::string, std::uint64_t> per_topic;
+  std::string last_failure;
+  Duration worst_lateness{};  // how far behind its time the latest message went out
+  int loops = 0;
+};
+
+// Reads and checks the whole file first (channels, schemas): a damaged file or a channel of an
+// unknown type is an Error before anything is published. Stops early when `stop` is set.
+Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop);
+
+}  // namespace teejet::replay
