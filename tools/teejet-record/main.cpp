@@ -184,6 +184,14 @@ int main(int argc, char** argv) {
       return kExitUsage;
     }
   }
+  // Each file carries its schemas (the IDL text, about 10 KB per topic) and a summary: a
+  // smaller limit would make files of little else.
+  constexpr std::uint64_t kSmallestSplit = 1ull << 20;
+  if (options.max_size != 0 && options.max_size < kSmallestSplit) {
+    std::cerr << "teejet-record: --max-size " << max_size_text
+              << " is below 1M: each file carries about 10 KB of schema per topic\n";
+    return kExitUsage;
+  }
   if (!chunk_size_text.empty()) {
     std::uint64_t chunk = 0;
     if (const auto error = parse_size(chunk_size_text, chunk); !error.empty() || chunk == 0) {

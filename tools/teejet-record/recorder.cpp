@@ -63,13 +63,10 @@ class RecordingFile {
                            .chunk_size = options.chunk_size,
                            .library = "teejet-record " TEEJET_VERSION});
     if (!writer) return writer.error();
-    auto file = std::unique_ptr<RecordingFile>(new RecordingFile(path, std::move(*writer)));
-    for (std::size_t i = 0; i < topics.size(); ++i) {
-      auto channel = file->add_channel(*topics[i].type, /*disposed=*/false);
-      if (!channel) return channel.error();
-      file->channels_[{i, false}] = *channel;
-    }
-    return file;
+    // Channels (and their schemas) are added with their first message: a topic nobody
+    // publishes costs nothing, and each schema carries the whole IDL text.
+    (void)topics;
+    return std::unique_ptr<RecordingFile>(new RecordingFile(path, std::move(*writer)));
   }
 
   Status write(std::size_t topic, const TopicType& type, bool disposed, std::uint64_t log_time,
@@ -194,7 +191,11 @@ class Recording {
     ++tally.messages;
     tally.bytes += sample.payload.size();
     ++progress_.messages;
-    if (options_.max_size != 0 && file_->bytes() >= options_.max_size) return split();
+    ++messages_in_file_;
+    // Never a file of nothing but schemas, however small --max-size is.
+    if (options_.max_size != 0 && file_->bytes() >= options_.max_size && messages_in_file_ > 0) {
+      return split();
+    }
     return {};
   }
 
@@ -228,6 +229,7 @@ class Recording {
     closed_bytes_ += file_->bytes();
     if (auto opened = open_next(); !opened) return opened;
     const std::uint64_t now = now_ns();
+    messages_in_file_ = 0;
     for (const auto& [key, last] : last_samples_) {
       if (auto written = file_->write(key.first, *topics_[key.first].type, false, now,
                                       last.source_ns, last.payload);
@@ -254,6 +256,7 @@ class Recording {
   std::unique_ptr<RecordingFile> file_;
   std::unique_ptr<CandumpFile> candump_;
   int file_index_ = 0;
+  std::uint64_t messages_in_file_ = 0;  // not counting the state a split file starts with
   std::uint64_t closed_bytes_ = 0;
   LastSamples last_samples_;
   Progress progress_;
