@@ -5,8 +5,8 @@
       every value of every message of the zstd, lz4 and uncompressed files is what was written;
       every topic of the DDS contract has a channel
   check_reader.py bad_files --writer WRITE_KNOWN_RECORDING --topics TOPICS_HPP
-      truncated, wrong magic, damaged chunk, damaged schema, unknown schema, undecodable
-      message, missing and empty file: exit 1 and one clear line, never a stack trace
+      truncated, wrong magic, damaged chunk, damaged schema, damaged summary, unknown schema,
+      undecodable message, missing and empty file: exit 1 and one clear line, never a stack trace
 
 Fails (never skips) when node or the pinned npm packages are missing: tools/install-deps.sh
 installs them.
@@ -129,6 +129,7 @@ def known_values(node, out, topics_hpp):
 
     for compression in ("zstd", "lz4", "none"):
         path = os.path.join(out, f"known-{compression}.mcap")
+        failed_before = len(failures)
         code, stdout, stderr = run_reader(node, path)
         if not check(code == 0 and stderr == "", f"{compression}: exit {code}, stderr {stderr!r}"):
             continue
@@ -141,8 +142,9 @@ def known_values(node, out, topics_hpp):
         check(chunks > 1, f"{compression}: {chunks} chunks, the test wants several")
         wanted = dict(counts, messages=len(expected), channels=len(counts), complete=True)
         check(summary == wanted, f"{compression} --counts: got {summary}, expected {wanted}")
-        print(f"{compression}: {len(expected)} messages on {len(counts)} channels in {chunks} "
-              f"chunks, every value as written")
+        if len(failures) == failed_before:
+            print(f"{compression}: {len(expected)} messages on {len(counts)} channels in "
+                  f"{chunks} chunks, every value as written")
 
 
 def records(data):
@@ -160,7 +162,7 @@ def records(data):
     return found
 
 
-CHUNK, SCHEMA, MESSAGE = 0x06, 0x03, 0x05
+CHUNK, SCHEMA, MESSAGE, STATISTICS = 0x06, 0x03, 0x05, 0x0B
 
 
 def chunk_records_start(data, start):
@@ -230,6 +232,11 @@ def bad_files(node, out):
         check(f"read {prefix} messages" in stderr,
               f"truncated {compression}: expected 'read {prefix} messages' in {stderr!r}")
         compare_messages(expected[:prefix], stdout.splitlines(), f"truncated {compression}")
+        code, stdout, _ = run_reader(node, path, "--allow-incomplete", "--counts")
+        summary = json.loads(stdout) if code == 0 else {}
+        check(summary.get("messages") == prefix and summary.get("chunks") == 2
+              and summary.get("complete") is False,
+              f"truncated {compression} --counts: exit {code}, {stdout!r}")
         print(f"truncated {compression} --allow-incomplete: exit {code}, "
               f"{len(stdout.splitlines())} of {len(expected)} messages: the first {prefix}")
 
@@ -254,6 +261,13 @@ def bad_files(node, out):
     data[comment + 3] ^= 0x20
     expect_clear_error(node, write_variant(out, "schema-damaged.mcap", data),
                        "flipped byte in a schema", "data section CRC")
+
+    # The summary (after Data End) is covered by the footer's CRC, which the indexed reader checks.
+    data = bytearray(files["zstd"])
+    _, start, end = next(r for r in records(data) if r[0] == STATISTICS)
+    data[start + 9] ^= 0x01  # the message count
+    expect_clear_error(node, write_variant(out, "summary-damaged.mcap", data),
+                       "flipped byte in the summary", "indexed read: Incorrect summary CRC")
 
     expect_clear_error(node, os.path.join(out, "unknown-schema.mcap"), "unknown schema",
                        'channel 0 "teejet/valve/position" sequence 1: schema '
