@@ -6,11 +6,17 @@
 //
 // Usage: read-mcap.mjs FILE [--counts] [--allow-incomplete]
 //
+// Checks: chunk CRCs and the data section CRC while reading the file through; for a complete
+// file, that the summary (chunk and message indexes, Statistics) leads to exactly the same
+// messages; that every message decodes with its schema.
+//
 // Prints one JSON line per message (file order):
 //   {"topic", "schema", "sequence", "log_time", "publish_time", "data"}
 // with 64-bit integers as decimal strings, enums as numbers and sequences as plain arrays;
 // with --counts one JSON object instead: {"<topic>": n, ..., "messages", "channels", "chunks",
-// "complete"}. A bad file gives one line "read-mcap: FILE: <reason>" on stderr and exit 1.
+// "complete"}. A bad file gives one line "read-mcap: FILE: <reason>" on stderr and exit 1; a
+// file without footer is read up to its last complete record, and exit 0 only with
+// --allow-incomplete. Usage errors exit 2.
 
 import fs from "node:fs";
 import process from "node:process";
@@ -98,32 +104,50 @@ async function decompressHandlers() {
   };
 }
 
-// Everything in file order, as far as the file goes: a killed recorder leaves no footer, and
-// what it wrote up to its last complete record is still a recording.
-function readStream(bytes, handlers) {
+// A growable typed array: a million messages as JS objects (BigInt times and all) cost a
+// gigabyte; as columns, 26 bytes each.
+class Column {
+  constructor(Type) {
+    this.Type = Type;
+    this.values = new Type(1024);
+    this.length = 0;
+  }
+
+  push(value) {
+    if (this.length === this.values.length) {
+      const grown = new this.Type(this.values.length * 2);
+      grown.set(this.values);
+      this.values = grown;
+    }
+    this.values[this.length++] = value;
+  }
+}
+
+// Every message in file order, as far as the file goes: a killed recorder leaves no footer, and
+// what it wrote up to its last complete record is still a recording. Fills `file` with what
+// the file holds besides.
+function* readStream(bytes, handlers, file) {
   const stream = new McapStreamReader({
     decompressHandlers: handlers,
     validateCrcs: true,
     includeChunks: true,
   });
   stream.append(bytes);
-  const schemas = new Map();
-  const channels = new Map();
-  const messages = [];
-  let chunks = 0;
+  Object.assign(file, { schemas: new Map(), channels: new Map(), messages: 0, chunks: 0 });
   for (let record; (record = stream.nextRecord()); ) {
     switch (record.type) {
       case "Schema":
-        schemas.set(record.id, record);
+        file.schemas.set(record.id, record);
         break;
       case "Channel":
-        channels.set(record.id, record);
+        file.channels.set(record.id, record);
         break;
       case "Message":
-        messages.push(record);
+        file.messages++;
+        yield record;
         break;
       case "Chunk":
-        chunks++;
+        file.chunks++;
         break;
       case "DataEnd":
         checkDataSectionCrc(bytes, bytes.length - stream.bytesRemaining(), record.dataSectionCrc);
@@ -132,26 +156,8 @@ function readStream(bytes, handlers) {
         break;
     }
   }
-  return {
-    schemas,
-    channels,
-    messages,
-    chunks,
-    complete: stream.done(),
-    unread: stream.bytesRemaining(),
-  };
-}
-
-function sameBytes(a, b) {
-  if (a.byteLength !== b.byteLength) {
-    return false;
-  }
-  for (let i = 0; i < a.byteLength; i++) {
-    if (a[i] !== b[i]) {
-      return false;
-    }
-  }
-  return true;
+  file.complete = stream.done();
+  file.unread = stream.bytesRemaining();
 }
 
 function describe(message, channels) {
@@ -160,66 +166,102 @@ function describe(message, channels) {
   return `channel ${message.channelId} ${topic} sequence ${message.sequence}`;
 }
 
+// What the indexed reader must find again of each message, in file order.
+class Seen {
+  constructor() {
+    this.channel = new Column(Uint16Array);
+    this.sequence = new Column(Uint32Array);
+    this.logTime = new Column(BigUint64Array);
+    this.publishTime = new Column(BigUint64Array);
+    this.crc = new Column(Uint32Array);
+  }
+
+  add(message) {
+    this.channel.push(message.channelId);
+    this.sequence.push(message.sequence);
+    this.logTime.push(message.logTime);
+    this.publishTime.push(message.publishTime);
+    this.crc.push(crc32(message.data));
+  }
+
+  // Indexes in log time order, ties in file order: the order of McapIndexedReader.
+  logTimeOrder() {
+    const n = this.logTime.length;
+    const times = this.logTime.values;
+    const order = new Uint32Array(n);
+    let sorted = true;
+    for (let i = 0; i < n; i++) {
+      order[i] = i;
+      sorted &&= i === 0 || times[i - 1] <= times[i];
+    }
+    if (!sorted) {
+      const byTime = Array.from(order).sort((a, b) =>
+        times[a] < times[b] ? -1 : times[a] > times[b] ? 1 : a - b,
+      );
+      order.set(byTime);
+    }
+    return order;
+  }
+}
+
 // The summary's way through the file (chunk indexes, message indexes) must find the very
 // messages the stream found, and the Statistics must count them.
-async function crossCheckIndexed(bytes, handlers, streamed) {
+async function crossCheckIndexed(bytes, handlers, file, seen, counted) {
   const readable = {
     size: async () => BigInt(bytes.length),
     read: async (offset, size) => bytes.subarray(Number(offset), Number(offset + size)),
   };
+  const order = seen.logTimeOrder();
+  const where = (i) =>
+    describe(
+      { channelId: seen.channel.values[i], sequence: seen.sequence.values[i] },
+      file.channels,
+    ) + ` at ${seen.logTime.values[i]}`;
   let indexed;
-  const viaIndex = [];
+  let found = 0;
   try {
     indexed = await McapIndexedReader.Initialize({ readable, decompressHandlers: handlers });
     for await (const message of indexed.readMessages({ validateCrcs: true })) {
-      viaIndex.push(message);
+      if (found >= order.length) {
+        throw new ReadError(
+          `the indexes lead to more messages than the ${order.length} in the file`,
+        );
+      }
+      const i = order[found++];
+      if (
+        message.channelId !== seen.channel.values[i] ||
+        message.sequence !== seen.sequence.values[i] ||
+        message.logTime !== seen.logTime.values[i] ||
+        message.publishTime !== seen.publishTime.values[i] ||
+        crc32(message.data) !== seen.crc.values[i]
+      ) {
+        throw new ReadError(
+          `message ${found} in log time order differs: read through it is ${where(i)}, ` +
+            `through the indexes ${describe(message, file.channels)} at ${message.logTime}`,
+        );
+      }
     }
   } catch (error) {
+    if (error instanceof ReadError) {
+      throw error;
+    }
     throw new ReadError(`indexed read: ${firstLine(error)}`);
   }
-
-  // The indexed reader yields in log time order (ties in file order); a stable sort of the
-  // file order is the same order.
-  const expected = [...streamed.messages].sort((a, b) =>
-    a.logTime < b.logTime ? -1 : a.logTime > b.logTime ? 1 : 0,
-  );
-  if (viaIndex.length !== expected.length) {
+  if (found !== order.length) {
     throw new ReadError(
-      `the indexes lead to ${viaIndex.length} messages, reading the file through gives ` +
-        `${expected.length}`,
+      `the indexes lead to ${found} messages, reading the file through gives ${order.length}`,
     );
-  }
-  for (let i = 0; i < expected.length; i++) {
-    const a = expected[i];
-    const b = viaIndex[i];
-    if (
-      a.channelId !== b.channelId ||
-      a.sequence !== b.sequence ||
-      a.logTime !== b.logTime ||
-      a.publishTime !== b.publishTime ||
-      !sameBytes(a.data, b.data)
-    ) {
-      throw new ReadError(
-        `message ${i + 1} in log time order differs: read through it is ` +
-          `${describe(a, streamed.channels)} at ${a.logTime}, through the indexes ` +
-          `${describe(b, streamed.channels)} at ${b.logTime}`,
-      );
-    }
   }
 
   const statistics = indexed.statistics;
   if (!statistics) {
     throw new ReadError("the summary has no Statistics record");
   }
-  const counted = new Map();
-  for (const message of streamed.messages) {
-    counted.set(message.channelId, (counted.get(message.channelId) ?? 0n) + 1n);
-  }
   for (const id of new Set([...counted.keys(), ...statistics.channelMessageCounts.keys()])) {
-    const inFile = counted.get(id) ?? 0n;
+    const inFile = BigInt(counted.get(id) ?? 0);
     const inStatistics = statistics.channelMessageCounts.get(id) ?? 0n;
     if (inFile !== inStatistics) {
-      const channel = streamed.channels.get(id);
+      const channel = file.channels.get(id);
       throw new ReadError(
         `channel ${id} "${channel?.topic ?? "?"}" has ${inFile} messages, the Statistics ` +
           `say ${inStatistics}`,
@@ -227,11 +269,11 @@ async function crossCheckIndexed(bytes, handlers, streamed) {
     }
   }
   const checks = [
-    ["messages", BigInt(streamed.messages.length), statistics.messageCount],
-    ["channels", streamed.channels.size, statistics.channelCount],
-    ["schemas", streamed.schemas.size, statistics.schemaCount],
-    ["chunks", streamed.chunks, statistics.chunkCount],
-    ["chunk indexes", streamed.chunks, indexed.chunkIndexes.length],
+    ["messages", file.messages, statistics.messageCount],
+    ["channels", file.channels.size, statistics.channelCount],
+    ["schemas", file.schemas.size, statistics.schemaCount],
+    ["chunks", file.chunks, statistics.chunkCount],
+    ["chunk indexes", file.chunks, indexed.chunkIndexes.length],
   ];
   for (const [what, inFile, inSummary] of checks) {
     if (Number(inFile) !== Number(inSummary)) {
@@ -241,15 +283,15 @@ async function crossCheckIndexed(bytes, handlers, streamed) {
 }
 
 // One MessageReader per schema, built when a message first needs it.
-function makeDecoder(streamed) {
+function makeDecoder() {
   const readers = new Map();
-  return (message) => {
-    const channel = streamed.channels.get(message.channelId);
-    const where = describe(message, streamed.channels);
+  return (message, file) => {
+    const channel = file.channels.get(message.channelId);
+    const where = describe(message, file.channels);
     if (channel.messageEncoding !== "cdr") {
       throw new ReadError(`${where}: message encoding '${channel.messageEncoding}', not 'cdr'`);
     }
-    const schema = streamed.schemas.get(channel.schemaId);
+    const schema = file.schemas.get(channel.schemaId);
     if (!schema) {
       throw new ReadError(`${where}: no schema (schema id ${channel.schemaId})`);
     }
@@ -267,7 +309,7 @@ function makeDecoder(streamed) {
       readers.set(schema.id, reader);
     }
     try {
-      return { schema: schema.name, data: reader.readMessage(message.data) };
+      return { topic: channel.topic, schema: schema.name, data: reader.readMessage(message.data) };
     } catch (error) {
       throw new ReadError(`${where}: cannot decode as '${schema.name}': ${firstLine(error)}`);
     }
@@ -302,6 +344,11 @@ function firstLine(error) {
   return text.split("\n")[0];
 }
 
+// A ReadError as is; anything else is a library's message, still one line.
+function asReadError(error) {
+  return error instanceof ReadError ? error : new ReadError(firstLine(error));
+}
+
 async function main(args) {
   let bytes;
   try {
@@ -310,78 +357,84 @@ async function main(args) {
     throw new ReadError(`cannot read: ${error.code ?? firstLine(error)}`);
   }
   const handlers = await decompressHandlers();
-  let streamed;
+
+  // First everything is checked and decoded, so that a bad file prints no message at all; the
+  // second pass through the file prints. Keeping the decoded messages instead would take a
+  // gigabyte per million.
+  const decode = makeDecoder();
+  const seen = new Seen();
+  const counted = new Map();
+  const file = {};
   try {
-    streamed = readStream(bytes, handlers);
-  } catch (error) {
-    if (error instanceof ReadError) {
-      throw error;
+    for (const message of readStream(bytes, handlers, file)) {
+      decode(message, file);
+      seen.add(message);
+      counted.set(message.channelId, (counted.get(message.channelId) ?? 0) + 1);
     }
-    throw new ReadError(firstLine(error));
+  } catch (error) {
+    throw asReadError(error);
   }
 
-  if (streamed.complete) {
-    await crossCheckIndexed(bytes, handlers, streamed);
+  if (file.complete) {
+    await crossCheckIndexed(bytes, handlers, file, seen, counted);
   } else {
     const what =
-      `file ends early (no footer: ${streamed.unread} of ${bytes.length} bytes after the ` +
+      `file ends early (no footer: ${file.unread} of ${bytes.length} bytes after the ` +
       `last complete record)`;
     if (!args.allowIncomplete) {
-      throw new ReadError(`${what}; --allow-incomplete reads the ${streamed.messages.length} ` +
-                          `messages before that`);
-    }
-    process.stderr.write(
-      `read-mcap: ${args.file}: warning: ${what}; read ${streamed.messages.length} messages ` +
-        `up to there\n`,
-    );
-  }
-
-  // Every message is decoded even for --counts: a count of undecodable samples proves nothing.
-  const decode = makeDecoder(streamed);
-  const lines = [];
-  const counts = {};
-  for (const channel of streamed.channels.values()) {
-    counts[channel.topic] ??= 0;
-  }
-  for (const message of streamed.messages) {
-    const { schema, data } = decode(message);
-    const topic = streamed.channels.get(message.channelId).topic;
-    counts[topic] += 1;
-    if (!args.counts) {
-      lines.push(
-        JSON.stringify({
-          topic,
-          schema,
-          sequence: message.sequence,
-          log_time: message.logTime.toString(),
-          publish_time: message.publishTime.toString(),
-          data: plain(data),
-        }),
+      throw new ReadError(
+        `${what}; --allow-incomplete reads the ${file.messages} messages before that`,
       );
     }
-  }
-  if (args.counts) {
-    lines.push(
-      JSON.stringify({
-        ...counts,
-        messages: streamed.messages.length,
-        channels: streamed.channels.size,
-        chunks: streamed.chunks,
-        complete: streamed.complete,
-      }),
+    process.stderr.write(
+      `read-mcap: ${args.file}: warning: ${what}; read ${file.messages} messages up to there\n`,
     );
   }
-  await writeLines(lines);
+
+  if (args.counts) {
+    const counts = {};
+    for (const channel of file.channels.values()) {
+      counts[channel.topic] = (counts[channel.topic] ?? 0) + (counted.get(channel.id) ?? 0);
+    }
+    await write(
+      `${JSON.stringify({
+        ...counts,
+        messages: file.messages,
+        channels: file.channels.size,
+        chunks: file.chunks,
+        complete: file.complete,
+      })}\n`,
+    );
+    return;
+  }
+  let block = [];
+  const again = {};
+  for (const message of readStream(bytes, handlers, again)) {
+    const { topic, schema, data } = decode(message, again);
+    block.push(
+      JSON.stringify({
+        topic,
+        schema,
+        sequence: message.sequence,
+        log_time: message.logTime.toString(),
+        publish_time: message.publishTime.toString(),
+        data: plain(data),
+      }),
+    );
+    if (block.length === 2000) {
+      await write(`${block.join("\n")}\n`);
+      block = [];
+    }
+  }
+  if (block.length > 0) {
+    await write(`${block.join("\n")}\n`);
+  }
 }
 
-// In blocks, and waiting for the pipe: process.exit() would cut off what is still buffered.
-async function writeLines(lines) {
-  const block = 2000;
-  for (let i = 0; i < lines.length; i += block) {
-    const text = `${lines.slice(i, i + block).join("\n")}\n`;
-    if (!process.stdout.write(text)) {
-      await new Promise((resolve) => process.stdout.once("drain", resolve));
-    }
+// Waiting for the pipe: process.exit() would cut off what is still buffered.
+async function write(text) {
+  if (!process.stdout.write(text)) {
+    await new Promise((resolve) => process.stdout.once("drain", resolve));
   }
 }
 
