@@ -289,7 +289,9 @@ def main():
     args = parser.parse_args()
     node = require_node()
     with tempfile.TemporaryDirectory(prefix="mcap-js-") as out:
-        subprocess.run([args.writer, out], check=True, timeout=60)
+        written = subprocess.run([args.writer, out], timeout=60, check=False)
+        if written.returncode != 0:
+            sys.exit(f"check_reader: {args.writer} failed (exit {written.returncode})")
         if args.mode == "known_values":
             known_values(node, out, args.topics)
         else:

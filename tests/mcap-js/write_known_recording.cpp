@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -55,7 +56,6 @@ constexpr std::uint64_t kAbove53 = 9'007'199'254'740'993ULL;
 
 std::string u64(std::uint64_t value) { return std::to_string(value); }
 double f32(float value) { return static_cast<double>(value); }
-std::string str(const auto& fixed) { return std::string(fixed.c_str()); }
 
 // Exactly string<64>'s bound.
 constexpr char kLongest[] = "gateway-64-chars-0123456789abcdefghijklmnopqrstuvwxyzABCDEFGHIJK";
