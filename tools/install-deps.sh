@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install every Debian package that building, testing and running the tools of
-# teejet-dds-gateway needs. Idempotent: when everything is already installed it
-# changes nothing and does not touch the network.
+# teejet-dds-gateway needs, and the npm packages of the independent MCAP reader
+# (tests/mcap-js, pinned in its package-lock.json). Idempotent: when everything is
+# already installed it changes nothing and does not touch the network.
 #
 # Usage: tools/install-deps.sh          install what is missing
 #        tools/install-deps.sh --print  print the package list, one per line
@@ -57,12 +58,26 @@ PACKAGES=(
   util-linux
   # formatting
   clang-format
+  # (Node and npm for tests/mcap-js: see NODE_PACKAGES below)
   # sanitizer builds and fuzz targets (asan, tsan presets): clang, its sanitizer and libFuzzer
   # runtimes, and llvm-symbolizer (package llvm) for file:line in reports
   clang
   libclang-rt-14-dev
   llvm
 )
+
+# Node (18 or newer) and npm run the independent MCAP reader of tests/mcap-js. Debian's
+# packages only when the commands are missing: a Node from elsewhere (nodesource bundles npm)
+# conflicts with Debian's npm package and serves as well.
+NODE_PACKAGES=()
+command -v node >/dev/null 2>&1 || NODE_PACKAGES+=(nodejs)
+command -v npm >/dev/null 2>&1 || NODE_PACKAGES+=(npm)
+PACKAGES+=("${NODE_PACKAGES[@]}")
+
+MCAP_JS="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/mcap-js"
+# npm ci runs when the lockfile differs from the one node_modules was installed from, whose
+# sha256 this file holds; npm ci empties node_modules first, so a failed install leaves none.
+MCAP_JS_STAMP="$MCAP_JS/node_modules/.teejet-lockfile-sha256"
 
 log() { printf 'install-deps: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
@@ -96,13 +111,6 @@ missing_packages() {
   done
 }
 
-mapfile -t missing < <(missing_packages)
-if ((${#missing[@]} == 0)); then
-  log "all ${#PACKAGES[@]} packages already installed"
-  exit 0
-fi
-log "missing ${#missing[@]} package(s): ${missing[*]}"
-
 # Run a command as root: directly when root, through sudo otherwise.
 as_root() {
   if ((EUID == 0)); then
@@ -114,11 +122,48 @@ as_root() {
   fi
 }
 
-# env, not an exported variable: sudo resets the environment.
-as_root env DEBIAN_FRONTEND=noninteractive apt-get update
-as_root env DEBIAN_FRONTEND=noninteractive \
-  apt-get install -y --no-install-recommends "${missing[@]}"
+install_debian_packages() {
+  local missing still_missing
+  mapfile -t missing < <(missing_packages)
+  if ((${#missing[@]} == 0)); then
+    log "all ${#PACKAGES[@]} packages already installed"
+    return
+  fi
+  log "missing ${#missing[@]} package(s): ${missing[*]}"
+  # env, not an exported variable: sudo resets the environment.
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get update
+  as_root env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y --no-install-recommends "${missing[@]}"
 
-mapfile -t still_missing < <(missing_packages)
-((${#still_missing[@]} == 0)) || die "still not installed: ${still_missing[*]}"
-log "installed ${#missing[@]} package(s)"
+  mapfile -t still_missing < <(missing_packages)
+  ((${#still_missing[@]} == 0)) || die "still not installed: ${still_missing[*]}"
+  log "installed ${#missing[@]} package(s)"
+}
+
+# As the user who runs this script (not root through sudo), so that node_modules is theirs.
+install_npm_packages() {
+  local lockfile="$MCAP_JS/package-lock.json" want have=""
+  if [[ ! -f "$lockfile" ]]; then
+    # e.g. docker/Dockerfile, which runs this script before copying the sources
+    log "no $lockfile: npm packages not installed"
+    return
+  fi
+  command -v node >/dev/null 2>&1 || die "node not found after installing nodejs"
+  command -v npm >/dev/null 2>&1 || die "npm not found after installing npm"
+  node -e 'process.exit(Number(process.versions.node.split(".")[0]) >= 18 ? 0 : 1)' ||
+    die "node $(node --version) is too old: tests/mcap-js needs Node 18 or newer"
+  want="$(sha256sum "$lockfile" | cut -d' ' -f1)"
+  [[ -f "$MCAP_JS_STAMP" ]] && have="$(<"$MCAP_JS_STAMP")"
+  if [[ "$have" == "$want" ]]; then
+    log "npm packages of tests/mcap-js already installed"
+    return
+  fi
+  log "installing the npm packages of tests/mcap-js (npm ci)"
+  (cd "$MCAP_JS" && npm ci --no-audit --no-fund) ||
+    die "npm ci in $MCAP_JS failed"
+  printf '%s\n' "$want" >"$MCAP_JS_STAMP"
+  log "installed the npm packages of tests/mcap-js"
+}
+
+install_debian_packages
+install_npm_packages
