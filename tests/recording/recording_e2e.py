@@ -92,8 +92,17 @@ class Run:
     def binary(self, relative):
         return os.path.join(self.args.build_dir, relative)
 
-    def start_logger(self, name, domain):
-        logger = self.start(name, [self.binary("tests/recording/recording_sample_logger"),
+    def realtime(self):
+        """chrt -r 10 where allowed: a replay is judged by millisecond gaps, and on a 2-core
+        machine running other tests a normal-priority process waits for the CPU for tens of
+        milliseconds (measured: up to 72 ms late with compilers running)."""
+        if subprocess.run(["chrt", "-r", "10", "true"], capture_output=True).returncode == 0:
+            return ["chrt", "-r", "10"]
+        return []
+
+    def start_logger(self, name, domain, realtime=False):
+        prefix = self.realtime() if realtime else []
+        logger = self.start(name, [*prefix, self.binary("tests/recording/recording_sample_logger"),
                                    "--domain", str(domain)], stdout=name + ".jsonl")
         wait_for_line(self.path(name + ".err"), "ready", 20, logger)
         return logger
@@ -323,9 +332,9 @@ def case_replay(run):
     messages, _ = run.read_mcap(recording)
     # Commands are not replayed unless asked (a gateway in the domain would move its valves).
     messages = [m for m in messages if m["topic"] != "teejet/valve/command"]
-    logger = run.start_logger("replayed", 1)
-    replay = run.run([run.binary("tools/teejet-replay/teejet-replay"), recording, "--domain", "1",
-                      "--wait-for-readers", "20"], timeout=120)
+    logger = run.start_logger("replayed", 1, realtime=True)
+    replay = run.run([*run.realtime(), run.binary("tools/teejet-replay/teejet-replay"), recording,
+                      "--domain", "1", "--wait-for-readers", "20"], timeout=120)
     check(run.stop(logger) == 0, "the replay subscriber did not exit 0")
     received = run.read_jsonl("replayed.jsonl")
     _, missed = compare_topics(logger_by_topic(received), file_by_topic(messages), "replay")
@@ -350,7 +359,8 @@ def case_replay(run):
     check(worst <= GAP_TOLERANCE_NS,
           f"replay: the gap before sample {where} of {len(pairs)} ({pairs[where][2]} after "
           f"{pairs[where - 1][2]}) was {(pairs[where][1] - pairs[where - 1][1]) / 1e6:.3f} ms, "
-          f"recorded {(pairs[where][0] - pairs[where - 1][0]) / 1e6:.3f} ms (limit ±5 ms)")
+          f"recorded {(pairs[where][0] - pairs[where - 1][0]) / 1e6:.3f} ms (limit ±5 ms)\n"
+          f"{replay.stderr.strip()}")
     span = (pairs[-1][0] - pairs[0][0]) / 1e9
     print(f"replay: {len(pairs)} samples over {span:.3f} s in the recorded order, "
           f"worst gap difference {worst / 1e6:.3f} ms (limit 5 ms)\n{replay.stderr.strip()}")

@@ -100,9 +100,11 @@ int main(int argc, char** argv) {
   }
   if (!quiet) {
     std::cerr << fmt::format(
-        "teejet-replay: {} messages published ({} refused), {} pass(es), latest {:.3f} ms late\n",
-        replayed->published, replayed->failed, replayed->loops,
-        std::chrono::duration<double, std::milli>(replayed->worst_lateness).count());
+        "teejet-replay: {} messages published ({} refused), {} pass(es); {} went out over 1 ms "
+        "late, the latest {:.3f} ms (message {})\n",
+        replayed->published, replayed->failed, replayed->loops, replayed->late_over_1ms,
+        std::chrono::duration<double, std::milli>(replayed->worst_lateness).count(),
+        replayed->worst_index);
     for (const auto& [topic, count] : replayed->per_topic) {
       std::cerr << fmt::format("  {:<36} {:>9}\n", topic, count);
     }

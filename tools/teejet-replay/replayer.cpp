@@ -140,8 +140,12 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
         std::this_thread::sleep_until(std::min(due, now + kStopCheck));
       }
       if (stop) return;
-      report.worst_lateness = std::max(report.worst_lateness,
-                                       Duration(std::chrono::steady_clock::now() - due));
+      const Duration late = std::chrono::steady_clock::now() - due;
+      if (late > report.worst_lateness) {
+        report.worst_lateness = late;
+        report.worst_index = report.published + report.failed + 1;
+      }
+      if (late > 1ms) ++report.late_over_1ms;
       const auto& [writer, disposed, topic] = route->second;
       const Status published = disposed ? writer->dispose(message.data, message.publish_time)
                                         : writer->write(message.data, message.publish_time);
