@@ -51,6 +51,8 @@ PACKAGES=(
   can-utils
   python3
   python3-can
+  # docs/recording.md's plot of a recording (tools/plot-recording.py)
+  python3-matplotlib
   # isolated kernel for vcan tests without host privileges
   user-mode-linux
   kmod
