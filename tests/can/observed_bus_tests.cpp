@@ -198,5 +198,18 @@ TEST_F(ObservedBusTest, ATimeoutOrAClosedBusReportsNothing) {
   EXPECT_TRUE(recorder.seen().empty());
 }
 
+TEST_F(ObservedBusTest, ReleaseHandsBackTheSameBusUnobserved) {
+  auto bus = observed();
+  VirtualBus peer(bus_name);
+  ASSERT_TRUE(peer.open());
+  std::unique_ptr<Bus> inner = bus->release();
+  bus.reset();
+  ASSERT_TRUE(inner->send(kStop));  // still open: releasing changes nothing on the bus
+  ASSERT_TRUE(peer.send(kImHere));
+  EXPECT_TRUE(inner->receive(1s));
+  EXPECT_TRUE(peer.receive(1s));
+  EXPECT_TRUE(recorder.seen().empty());
+}
+
 }  // namespace
 }  // namespace teejet::can

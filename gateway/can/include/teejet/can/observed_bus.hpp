@@ -44,7 +44,9 @@ class ObservedBus final : public Bus {
                             std::chrono::milliseconds timeout) override;
   BusStatistics statistics() const override { return inner_->statistics(); }
 
-  Bus& inner() { return *inner_; }
+  // Hands back the bus it wraps, unobserved: for when the observer is about to go. This
+  // ObservedBus is then empty and may only be destroyed.
+  std::unique_ptr<Bus> release() { return std::move(inner_); }
 
  private:
   std::unique_ptr<Bus> inner_;
