@@ -93,10 +93,10 @@ bridge::ValveLimits read_limits(const Reader& reader, const YAML::Node& node,
 }
 
 void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& config) {
-  reader.expect_keys(
-      g, "gateway",
-      {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
-       "on_commander_lost", "allow_baud_change", "receive_coalesce_us", "reject_unknown_serials"});
+  reader.expect_keys(g, "gateway",
+                     {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
+                      "on_commander_lost", "allow_baud_change", "receive_coalesce_us",
+                      "reject_unknown_serials", "record_frames"});
   if (g["name"]) config.bridge.gateway_name = reader.scalar(g["name"], "gateway.name");
   if (g["can"]) config.can = reader.scalar(g["can"], "gateway.can");
   if (g["domain"]) {
@@ -125,6 +125,9 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
   if (g["reject_unknown_serials"]) {
     config.bridge.reject_unknown_serials =
         reader.flag(g["reject_unknown_serials"], "gateway.reject_unknown_serials");
+  }
+  if (g["record_frames"]) {
+    config.record_frames = reader.flag(g["record_frames"], "gateway.record_frames");
   }
   if (g["receive_coalesce_us"]) {
     config.receive_coalesce = std::chrono::microseconds(

@@ -27,6 +27,9 @@ struct GatewayConfig {
   // batch before taking the next one (interrupt moderation): one wake-up carries several
   // frames. 0: every frame wakes the reader. docs/performance.md has the trade.
   Duration receive_coalesce = std::chrono::microseconds(0);
+  // Publish every frame the gateway sends and receives on teejet/can/frame. Off: no frame
+  // topic or writer exists at all.
+  bool record_frames = false;
   // For --can sim:N: the embedded simulator's N valves, serials from sim_first_serial up.
   std::uint32_t sim_first_serial = 1;
   double sim_degrees_per_second = 90.0;

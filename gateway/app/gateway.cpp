@@ -54,6 +54,18 @@ Status Gateway::start() {
   auto publisher = dds::GatewayPublisher::create(*participant_);
   if (!publisher) return fail(publisher.error());
   publisher_ = std::move(*publisher);
+  if (config_.record_frames) {
+    auto frames = dds::FramePublisher::create(*participant_, config_.bridge.gateway_name,
+                                              config_.bridge.can_interface);
+    if (!frames) return fail(frames.error());
+    frames_ = std::move(*frames);
+    // Wrapped before the bridge and the threads see the bus, so that every frame they send or
+    // take goes through the observer; what arrived since open() is waiting inside and is seen
+    // when taken.
+    auto observed = std::make_unique<can::ObservedBus>(std::move(backend_.bus), *frames_, clock_);
+    observed_bus_ = observed.get();
+    backend_.bus = std::move(observed);
+  }
   bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_);
   auto commands = dds::CommandSubscription::create(*participant_, lost_commanders_);
   if (!commands) return fail(commands.error());
@@ -65,8 +77,8 @@ Status Gateway::start() {
   // Named for top -H, perf and the benchmarks' per-thread CPU figures (15 characters at most).
   pthread_setname_np(reader_.native_handle(), "tj-bus-reader");
   pthread_setname_np(commander_.native_handle(), "tj-commands");
-  spdlog::info("gateway '{}' on {} in DDS domain {}", config_.bridge.gateway_name, config_.can,
-               config_.domain);
+  spdlog::info("gateway '{}' on {} in DDS domain {}{}", config_.bridge.gateway_name, config_.can,
+               config_.domain, frames_ ? ", every frame on teejet/can/frame" : "");
   return {};
 }
 
@@ -99,10 +111,18 @@ void Gateway::stop() {
           std::chrono::duration_cast<std::chrono::milliseconds>(kLastStatusesWait).count());
     }
   }
-  // The publisher's writers go with the participant; the bridge writes through them.
+  // The publishers' writers go with the participant; the bridge writes through them, and the
+  // bus through frames_ (nothing sends or takes frames any more).
   participant_.reset();
   bridge_.reset();
   publisher_.reset();
+  // The bus goes back to its unobserved self before its observer goes: a later start() finds
+  // the bus as it was made.
+  if (observed_bus_) {
+    backend_.bus = observed_bus_->release();
+    observed_bus_ = nullptr;
+  }
+  frames_.reset();
   if (backend_.bus) backend_.bus->close();
   if (backend_.simulator) backend_.simulator->stop();
 }

@@ -13,6 +13,7 @@
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/dds/command_subscription.hpp"
+#include "teejet/dds/frame_publisher.hpp"
 #include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/sim/simulator.hpp"
 
@@ -52,6 +53,8 @@ class Gateway {
   std::shared_ptr<dds::LostCommanders> lost_commanders_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<dds::GatewayPublisher> publisher_;
+  std::unique_ptr<dds::FramePublisher> frames_;  // with record_frames only
+  can::ObservedBus* observed_bus_ = nullptr;     // backend_.bus while frames_ observes it
   std::unique_ptr<bridge::Bridge> bridge_;
   std::unique_ptr<dds::CommandSubscription> commands_;
   std::jthread reader_;

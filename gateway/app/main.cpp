@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "teejet-gateway " TEEJET_VERSION);
   std::string can, profile, config_file, name, log_level = "info";
   int domain = 0;
-  bool allow_baud_change = false, keep_valves_running = false;
+  bool allow_baud_change = false, keep_valves_running = false, record_frames = false;
   app.add_option("--can", can,
                  "SocketCAN interface (can0, vcan0), or sim:N for N simulated valves in-process")
       ->type_name("IFACE|sim:N");
@@ -79,6 +79,8 @@ int main(int argc, char** argv) {
                "let DDS clients change a valve's CAN bit rate (refused otherwise)");
   app.add_flag("--keep-valves-running", keep_valves_running,
                "do not send Stop to every valve on exit");
+  app.add_flag("--record-frames", record_frames,
+               "publish every CAN frame sent and received on teejet/can/frame (best effort)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
   teejet::command_line::refuse_empty_values(app);
@@ -104,6 +106,7 @@ int main(int argc, char** argv) {
   if (app.count("--name")) config.bridge.gateway_name = name;
   if (allow_baud_change) config.bridge.allow_baud_change = true;
   if (keep_valves_running) config.stop_valves_on_exit = false;
+  if (record_frames) config.record_frames = true;
   if (config.can.empty()) {
     spdlog::error("no CAN bus: give --can IFACE (or sim:N), or gateway.can in the config file");
     return kExitUsage;

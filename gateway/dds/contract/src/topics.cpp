@@ -40,6 +40,23 @@ Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, i
   return qos;
 }
 
+// Best effort, for the raw frames: one instance (BusFrame has no key), `depth` samples.
+template <class Qos>
+Qos best_effort(int depth) {
+  Qos qos;
+  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = VOLATILE_DURABILITY_QOS;
+  qos.history().kind = KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = depth;
+  qos.resource_limits().max_instances = 1;
+  qos.resource_limits().max_samples_per_instance = depth;
+  qos.resource_limits().max_samples = depth;
+  return qos;
+}
+
+constexpr int kFramesWritten = 256;
+constexpr int kFramesHeld = 8192;
+
 }  // namespace
 
 DataWriterQos state_writer_qos() {
@@ -75,5 +92,8 @@ DataWriterQos status_writer_qos() {
 DataReaderQos status_reader_qos() {
   return reliable<DataReaderQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 32);
 }
+
+DataWriterQos frame_writer_qos() { return best_effort<DataWriterQos>(kFramesWritten); }
+DataReaderQos frame_reader_qos() { return best_effort<DataReaderQos>(kFramesHeld); }
 
 }  // namespace teejet::dds::topics

@@ -78,4 +78,14 @@ eprosima::fastdds::dds::DataReaderQos command_reader_qos();
 eprosima::fastdds::dds::DataWriterQos status_writer_qos();
 eprosima::fastdds::dds::DataReaderQos status_reader_qos();
 
+// Raw bus frames (only from a gateway started with --record-frames): BEST_EFFORT, VOLATILE,
+// KEEP_LAST, one keyless instance. A reader that is slow or gone never slows the gateway, which
+// publishes on the thread that read or sent the frame; it loses the oldest frames instead.
+// Writer depth 256: a best-effort writer sends inside write() and never resends, so its history
+// only has to cover the bursts of a receive batch (64) while a local reader copies them. Reader
+// depth 8192: three seconds of a full 32-valve bus polled every 0.1 s (2,600 frames/s measured,
+// docs/performance.md), so a recorder that takes its samples a few times a second loses none.
+eprosima::fastdds::dds::DataWriterQos frame_writer_qos();
+eprosima::fastdds::dds::DataReaderQos frame_reader_qos();
+
 }  // namespace teejet::dds::topics
