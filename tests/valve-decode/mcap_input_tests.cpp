@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "codec/sheet_cases.hpp"
+#include "mcap_input.hpp"
 #include "support/scratch_dir.hpp"
 #include "support/subprocess.hpp"
 #include "teejet/bus_frame/bus_frame.hpp"
@@ -111,15 +112,17 @@ std::vector<teejet::BusFrame> sheet_frames(const std::string& gateway = "gw-left
 // and a teejet/valve/position channel whose messages valve-decode must skip.
 class Recording {
  public:
+  // `idl`: the schemas' data, valve.idl as teejet-record writes it unless a test needs a small
+  // file.
   explicit Recording(const std::string& compression, std::size_t chunk_size = 1 << 20,
-                     bool with_frame_channel = true) {
+                     bool with_frame_channel = true,
+                     const std::string& idl = read_text(kValveIdl)) {
     auto sink = std::make_unique<mcap::MemorySink>();
     memory_ = sink.get();
     auto writer = mcap::Writer::create(std::move(sink),
                                        {.compression = compression, .chunk_size = chunk_size});
     EXPECT_TRUE(writer.ok()) << writer.error().reason;
     writer_ = std::move(*writer);
-    const std::string idl = read_text(kValveIdl);
     const Bytes idl_bytes(idl.begin(), idl.end());
     const auto position_schema = writer_->add_schema("teejet::ValvePosition", "omgidl", idl_bytes);
     position_channel_ = *writer_->add_channel(*position_schema, "teejet/valve/position", "cdr",
@@ -157,8 +160,8 @@ class Recording {
 };
 
 Bytes record(const std::vector<teejet::BusFrame>& frames, const std::string& compression = "zstd",
-             std::size_t chunk_size = 1 << 20) {
-  Recording recording(compression, chunk_size);
+             std::size_t chunk_size = 1 << 20, const std::string& idl = read_text(kValveIdl)) {
+  Recording recording(compression, chunk_size, true, idl);
   for (const auto& sample : frames) recording.frame(sample);
   return recording.finish();
 }
@@ -418,6 +421,68 @@ TEST(ValveDecodeMcap, HelpExplainsTheMcapInput) {
   for (const char* text : {"MCAP", "teejet::BusFrame", "teejet/can/frame", R"("gw":)",
                            "standard input is always", "--record-frames"}) {
     EXPECT_NE(run.out.find(text), std::string::npos) << text;
+  }
+}
+
+// Damage at every byte: a schema text of a few bytes keeps the files (and the run) small.
+constexpr const char* kSmallIdl = "module teejet { struct BusFrame { uint32 id; }; };";
+
+// In process, so that every damaged variant of a recording is cheap: decode_mcap itself.
+struct Decoded {
+  bool ok = false;
+  std::string out;
+  std::string err;
+};
+Decoded decode_in_process(const Bytes& file) {
+  std::ostringstream out;
+  std::ostringstream err;
+  const bool ok = teejet::valve_decode::decode_mcap(file, "rec.mcap", out, err);
+  return {ok, out.str(), err.str()};
+}
+
+void expect_json_lines(const std::string& out) {
+  for (const auto& line : lines_of(out)) {
+    EXPECT_TRUE(nlohmann::ordered_json::accept(line)) << line;
+  }
+}
+
+TEST(ValveDecodeMcapDamage, EveryCutPrintsALeadingPartOfTheWholeOutput) {
+  for (const std::string compression : {"zstd", ""}) {
+    SCOPED_TRACE("compression \"" + compression + "\"");
+    const auto file = record(sheet_frames(), compression, 64, kSmallIdl);
+    const auto whole = decode_in_process(file);
+    ASSERT_TRUE(whole.ok) << whole.err;
+    ASSERT_EQ(lines_of(whole.out), kSheetLines);
+    std::size_t complete_cuts = 0;
+    for (std::size_t size = 0; size < file.size(); ++size) {
+      const auto cut =
+          decode_in_process(Bytes(file.begin(), file.begin() + static_cast<long>(size)));
+      ASSERT_TRUE(whole.out.starts_with(cut.out)) << size << " bytes: " << cut.out;
+      EXPECT_TRUE(cut.out.empty() || cut.out.ends_with('\n')) << size << " bytes";
+      EXPECT_FALSE(cut.err.empty()) << size << " bytes: a cut file is never silently whole";
+      if (cut.ok && cut.out == whole.out) ++complete_cuts;
+    }
+    // The summary and footer follow the last chunk: cut there, every frame is still printed.
+    EXPECT_GT(complete_cuts, 0u);
+  }
+}
+
+TEST(ValveDecodeMcapDamage, EveryByteFlipIsAnErrorOrJsonLinesNeverACrash) {
+  for (const std::string compression : {"zstd", "lz4", ""}) {
+    SCOPED_TRACE("compression \"" + compression + "\"");
+    const auto file = record(sheet_frames(), compression, 64, kSmallIdl);
+    std::size_t refused = 0;
+    for (std::size_t at = 0; at < file.size(); ++at) {
+      auto flipped = file;
+      flipped[at] ^= 0xFF;
+      const auto decoded = decode_in_process(flipped);
+      expect_json_lines(decoded.out);
+      if (!decoded.ok) {
+        ++refused;
+        EXPECT_TRUE(decoded.err.starts_with("valve-decode: rec.mcap: ")) << decoded.err;
+      }
+    }
+    EXPECT_GT(refused, 0u);
   }
 }
 
