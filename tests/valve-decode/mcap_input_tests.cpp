@@ -385,6 +385,30 @@ TEST(ValveDecodeMcap, ACrcFlipIsAnErrorNamingTheFileAndNothingOfItIsPrinted) {
   EXPECT_EQ(lines_of(run.out).size(), kSheetLines.size()) << "only the good file's lines";
 }
 
+TEST(ValveDecodeMcap, AFrameChannelThatIsNotCdrGivesAnErrorPerMessage) {
+  auto sink = std::make_unique<mcap::MemorySink>();
+  const auto* memory = sink.get();
+  auto writer = mcap::Writer::create(std::move(sink), {.compression = ""});
+  ASSERT_TRUE(writer.ok());
+  const Bytes idl{'x'};
+  const auto schema = (*writer)->add_schema("teejet::BusFrame", "omgidl", idl);
+  const auto json = *(*writer)->add_channel(*schema, "teejet/can/frame", "json");
+  const auto cdr = *(*writer)->add_channel(*schema, "teejet/can/frame", "cdr");
+  ASSERT_TRUE((*writer)->write(json, 1, 5, 5, Bytes{'{', '}'}).ok());
+  ASSERT_TRUE((*writer)->write(cdr, 1, 6, 6, teejet::bus_frame::serialize(sheet_frames()[0])).ok());
+  ASSERT_TRUE((*writer)->finish().ok());
+  ScratchDir dir;
+  const auto path = (dir.path() / "json.mcap").string();
+  write_bytes(path, memory->bytes());
+  const auto run = run_valve_decode({path});
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_EQ(run.err, "");
+  expect_same_lines(run.out, R"({"error":"message encoding \"json\" is not cdr",)"
+                             R"("topic":"teejet/can/frame","sequence":1,"log_time":5})"
+                             "\n" +
+                                 kSheetLines[0] + "\n");
+}
+
 TEST(ValveDecodeMcap, AFileOfOnlyTheMagicHasNoFrameChannel) {
   ScratchDir dir;
   const auto path = (dir.path() / "magic.mcap").string();

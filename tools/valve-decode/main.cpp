@@ -52,8 +52,8 @@ text, and so is a FILE with any other first bytes (a damaged magic too: its line
 errors). Every message of every channel whose schema is teejet::BusFrame (topic
 teejet/can/frame) prints, in file order, exactly the line of the same frame logged by
 candump -L: "t" is the frame's stamp_ns cut to microseconds, "iface" its can_interface.
-Other channels are skipped. Only when the frames come from more than one
-gateway does every line of that file carry the gateway's name after "t" (or "error"):
+Other channels are skipped. Only when a file's frames come from more than one gateway does
+each frame's line (decoded or not) carry the gateway's name after "t" (or "error"):
   {"t":1700000000.000123,"gw":"sprayer-left","iface":"can0",...}
 A message that is not a frame (does not deserialize, dlc above 8, data not dlc bytes) prints
   {"error":"<reason>","topic":"teejet/can/frame","sequence":<n>,"log_time":<ns>}
