@@ -96,5 +96,34 @@ TEST(ValveDecodeFrameJson, InvalidUtf8IsReplacedNotThrown) {
   EXPECT_EQ(ordered_json::parse(text)["fields"]["application"], "1.02[0xFF]");
 }
 
+TEST(ValveDecodeFrameJson, GatewayFollowsTheFirstMember) {
+  const auto record =
+      candump::parse_log_line("(0000000007.000120) vcan0 18EFD8D5#1105FFFFFFFFFFFF");
+  ASSERT_TRUE(record);
+  EXPECT_EQ(record_json_line(*record, *codec::decode(record->frame), "left \"boom\""),
+            R"({"t":7.000120,"gw":"left \"boom\"","iface":"vcan0","dir":"to_valve",)"
+            R"("addr":216,"msg":"request_position","fields":{"resend_tenths":5}})");
+  EXPECT_EQ(error_json_line("bad", "x", "gw-1"), R"({"error":"bad","gw":"gw-1","line":"x"})");
+  EXPECT_EQ(error_json_line("bad", "x", ""), R"({"error":"bad","gw":"","line":"x"})");
+}
+
+TEST(ValveDecodeFrameJson, DecodeRecordPrintsWhatTheRecordsLogLinePrints) {
+  for (const char* line :
+       {"(1700000000.000123) can0 18EFD5D8#0000000000007B00",
+        "(1700000000.000123) can0 18EFD8D5#024B0104D2", "(1700000000.000001) can1 123#AB01",
+        "(0000000001.999999) can0 18EFD5D8#", "(1700000000.000123) can0 18EFD5D8#7700"}) {
+    const auto record = candump::parse_log_line(line);
+    ASSERT_TRUE(record) << line;
+    EXPECT_EQ(decode_record(*record), decode_log_line(line)) << line;
+  }
+}
+
+TEST(ValveDecodeFrameJson, MessageErrorLineNamesTheRecordedMessage) {
+  EXPECT_EQ(message_error_json_line("dlc 9 is above 8", "teejet/can/frame", 17,
+                                    1'700'000'000'000'123'000ULL),
+            R"({"error":"dlc 9 is above 8","topic":"teejet/can/frame","sequence":17,)"
+            R"("log_time":1700000000000123000})");
+}
+
 }  // namespace
 }  // namespace teejet::valve_decode

@@ -53,8 +53,10 @@ std::string timestamp_json_number(std::uint64_t seconds, std::uint32_t microseco
   return text.data();
 }
 
-std::string record_json_line(const candump::LogRecord& record, const codec::DecodedFrame& frame) {
+std::string record_json_line(const candump::LogRecord& record, const codec::DecodedFrame& frame,
+                             std::optional<std::string_view> gateway) {
   ordered_json members;
+  if (gateway) members["gw"] = *gateway;
   members["iface"] = record.interface_name;
   const auto frame_members = frame_json(frame);
   for (const auto& member : frame_members.items()) members[member.key()] = member.value();
@@ -63,10 +65,32 @@ std::string record_json_line(const candump::LogRecord& record, const codec::Deco
          dump(members).substr(1);
 }
 
-std::string error_json_line(std::string_view reason, std::string_view line) {
+std::string error_json_line(std::string_view reason, std::string_view line,
+                            std::optional<std::string_view> gateway) {
   ordered_json json;
   json["error"] = reason;
+  if (gateway) json["gw"] = *gateway;
   json["line"] = line;
+  return dump(json);
+}
+
+std::string decode_record(const candump::LogRecord& record,
+                          std::optional<std::string_view> gateway) {
+  const auto decoded = codec::decode(record.frame);
+  if (decoded) return record_json_line(record, *decoded, gateway);
+  return error_json_line(decoded.error().reason,
+                         candump::format_log_line(record.seconds, record.microseconds,
+                                                  record.interface_name, record.frame),
+                         gateway);
+}
+
+std::string message_error_json_line(std::string_view reason, std::string_view topic,
+                                    std::uint32_t sequence, std::uint64_t log_time) {
+  ordered_json json;
+  json["error"] = reason;
+  json["topic"] = topic;
+  json["sequence"] = sequence;
+  json["log_time"] = log_time;
   return dump(json);
 }
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -25,10 +26,25 @@ std::string timestamp_json_number(std::uint64_t seconds, std::uint32_t microseco
 
 // One output line, without the newline:
 //   {"t":1700000000.000123,"iface":"can0", followed by the members of frame_json}
-std::string record_json_line(const candump::LogRecord& record, const codec::DecodedFrame& frame);
+// With a gateway (MCAP recordings of several gateways), "gw":"<gateway>" follows "t".
+std::string record_json_line(const candump::LogRecord& record, const codec::DecodedFrame& frame,
+                             std::optional<std::string_view> gateway = std::nullopt);
 
-// {"error":"<reason>","line":"<line>"}, without the newline.
-std::string error_json_line(std::string_view reason, std::string_view line);
+// {"error":"<reason>","line":"<line>"}, without the newline; with a gateway,
+// {"error":"<reason>","gw":"<gateway>","line":"<line>"}.
+std::string error_json_line(std::string_view reason, std::string_view line,
+                            std::optional<std::string_view> gateway = std::nullopt);
+
+// A frame that was not read from a log line (an MCAP recording's teejet/can/frame sample) as
+// valve-decode prints the same frame read from its candump -L line: the record, or the error
+// with the candump line that the frame would have been logged as.
+std::string decode_record(const candump::LogRecord& record,
+                          std::optional<std::string_view> gateway = std::nullopt);
+
+// A recorded message that is not a frame at all (does not deserialize, dlc above 8, ...):
+//   {"error":"<reason>","topic":"teejet/can/frame","sequence":17,"log_time":1700000000000123000}
+std::string message_error_json_line(std::string_view reason, std::string_view topic,
+                                    std::uint32_t sequence, std::uint64_t log_time);
 
 // One line of a candump -L log (without its newline) as valve-decode prints it: the record, or
 // the error saying why it could not be read or decoded.
