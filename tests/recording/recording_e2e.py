@@ -389,6 +389,9 @@ def case_split(run):
             serials = {m["data"]["serial"] for m in carried if m["topic"] == "teejet/valve/presence"}
             check(serials == set(range(1, 33)),
                   f"split: {name} starts with presence of {sorted(serials)}, not all 32 valves")
+            events = [m["topic"] for m in carried if m["topic"] in ("teejet/valve/command",
+                                                                     "teejet/can/frame")]
+            check(not events, f"split: {name} starts with events, not state: {events}")
             messages = messages[len(carried):]
         live += messages
     counts, missed = compare_topics(logger_by_topic(logged), file_by_topic(live), "split",

@@ -1,10 +1,9 @@
 // teejet-record's --info and teejet-replay on files a user might hand them: good ones, cut ones,
 // damaged ones and foreign ones. Each gets a clear answer naming the problem, never a crash.
 // Replay creates a DDS participant: this suite runs in a private network namespace.
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include <atomic>
 #include <fstream>
@@ -52,20 +51,20 @@ struct FileSpec {
 Bytes make_file(const FileSpec& spec) {
   auto sink = std::make_unique<mcap::MemorySink>();
   auto* memory = sink.get();
-  auto writer = mcap::Writer::create(std::move(sink), {.compression = spec.compression,
-                                                       .chunk_size = spec.chunk_size});
+  auto writer = mcap::Writer::create(
+      std::move(sink), {.compression = spec.compression, .chunk_size = spec.chunk_size});
   EXPECT_TRUE(writer.ok());
   const auto idl = recording::valve_idl();
   const auto schema = (*writer)->add_schema(
       spec.schema, "omgidl", {reinterpret_cast<const std::uint8_t*>(idl.data()), idl.size()});
-  const auto channel = (*writer)->add_channel(*schema, spec.topic, "cdr",
-                                              {{"dds_topic", spec.topic}});
+  const auto channel =
+      (*writer)->add_channel(*schema, spec.topic, "cdr", {{"dds_topic", spec.topic}});
   for (int i = 0; i < spec.messages; ++i) {
-    const Bytes payload = spec.payload_override.empty()
-                              ? position_payload(1, static_cast<float>(i))
-                              : spec.payload_override;
+    const Bytes payload = spec.payload_override.empty() ? position_payload(1, static_cast<float>(i))
+                                                        : spec.payload_override;
     const std::uint64_t at = kStart + static_cast<std::uint64_t>(i) * 1'000'000;  // 1 ms apart
-    EXPECT_TRUE((*writer)->write(*channel, static_cast<std::uint32_t>(i + 1), at, at, payload).ok());
+    EXPECT_TRUE(
+        (*writer)->write(*channel, static_cast<std::uint32_t>(i + 1), at, at, payload).ok());
   }
   EXPECT_TRUE((*writer)->finish().ok());
   return memory->bytes();
@@ -76,7 +75,8 @@ class RecordingFiles : public ::testing::Test {
   std::string save(const std::string& name, const Bytes& bytes) {
     const std::string path = (dir_.path() / name).string();
     std::ofstream(path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
     return path;
   }
 
@@ -170,7 +170,8 @@ TEST_F(RecordingFiles, AFlippedByteFailsTheChunkCrc) {
 }
 
 TEST_F(RecordingFiles, AForeignTopicIsListedButNotReplayed) {
-  const auto path = save("foreign.mcap", make_file({.schema = "acme::Thing", .topic = "acme/thing"}));
+  const auto path =
+      save("foreign.mcap", make_file({.schema = "acme::Thing", .topic = "acme/thing"}));
   const auto described = info(path);
   EXPECT_EQ(described.status, 0);
   EXPECT_THAT(described.out, HasSubstr("acme::Thing"));
@@ -185,13 +186,15 @@ TEST_F(RecordingFiles, ATeejetTopicWithAnotherSchemaIsRefused) {
   const auto replayed = replay_file(path);
   ASSERT_FALSE(replayed.ok());
   EXPECT_EQ(replayed.error().reason,
-            path + ": channel 0 'teejet/valve/position': schema 'teejet::ValveVoltage' (omgidl) "
-                   "is not the one this replayer knows for teejet/valve/position: "
-                   "'teejet::ValvePosition' (omgidl)");
+            path +
+                ": channel 0 'teejet/valve/position': schema 'teejet::ValveVoltage' (omgidl) "
+                "is not the one this replayer knows for teejet/valve/position: "
+                "'teejet::ValvePosition' (omgidl)");
 }
 
 TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
-  const auto path = save("payload.mcap", make_file({.messages = 3, .payload_override = {0, 1, 0, 0, 7}}));
+  const auto path =
+      save("payload.mcap", make_file({.messages = 3, .payload_override = {0, 1, 0, 0, 7}}));
   const auto replayed = replay_file(path);
   ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
   EXPECT_EQ(replayed->published, 0u);
@@ -202,11 +205,12 @@ TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
 
 TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
   const auto empty = save("empty.mcap", {});
-  EXPECT_EQ(info(empty).err, "teejet-record: " + empty + ": not an MCAP file: shorter than its magic bytes\n");
+  EXPECT_EQ(info(empty).err,
+            "teejet-record: " + empty + ": not an MCAP file: shorter than its magic bytes\n");
   const auto missing = (dir_.path() / "missing.mcap").string();
   EXPECT_EQ(info(missing).status, 1);
-  EXPECT_EQ(info(missing).err,
-            "teejet-record: " + missing + ": " + missing + ": cannot open: No such file or directory\n");
+  EXPECT_EQ(info(missing).err, "teejet-record: " + missing + ": " + missing +
+                                   ": cannot open: No such file or directory\n");
   ASSERT_FALSE(replay_file(missing).ok());
 }
 

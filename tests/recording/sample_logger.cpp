@@ -9,13 +9,13 @@
 // "ready" goes to stderr once every reader exists. uint64 values are decimal strings, as the
 // npm reader prints them; floats are the float32 values widened to double.
 
-#include <fastdds/dds/core/condition/WaitSet.hpp>
-#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <pthread.h>
 
 #include <atomic>
 #include <csignal>
 #include <cstring>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -36,31 +36,42 @@ json version(const teejet::SoftwareVersion& v) {
 }
 
 json fields(const teejet::ValvePresence& s) {
-  return {{"serial", s.serial()},          {"address", s.address()},
-          {"online", s.online()},          {"part_number", s.part_number()},
-          {"boot_mode", s.boot_mode()},    {"last_seen_ns", u64(s.last_seen_ns())},
+  return {{"serial", s.serial()},
+          {"address", s.address()},
+          {"online", s.online()},
+          {"part_number", s.part_number()},
+          {"boot_mode", s.boot_mode()},
+          {"last_seen_ns", u64(s.last_seen_ns())},
           {"gateway", s.gateway().to_string()}};
 }
 json fields(const teejet::ValveVersion& s) {
-  return {{"serial", s.serial()}, {"application", version(s.application())},
-          {"bootloader", version(s.bootloader())}, {"received_ns", u64(s.received_ns())}};
+  return {{"serial", s.serial()},
+          {"application", version(s.application())},
+          {"bootloader", version(s.bootloader())},
+          {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValvePosition& s) {
   return {{"serial", s.serial()}, {"degrees", s.degrees()}, {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveTemperature& s) {
-  return {{"serial", s.serial()}, {"valve_c", s.valve_c()}, {"sensor_c", s.sensor_c()},
+  return {{"serial", s.serial()},
+          {"valve_c", s.valve_c()},
+          {"sensor_c", s.sensor_c()},
           {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveVoltage& s) {
   return {{"serial", s.serial()}, {"volts", s.volts()}, {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveCurrent& s) {
-  return {{"serial", s.serial()}, {"amps", s.amps()}, {"last_running_amps", s.last_running_amps()},
+  return {{"serial", s.serial()},
+          {"amps", s.amps()},
+          {"last_running_amps", s.last_running_amps()},
           {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveDegreesPerSecond& s) {
-  return {{"serial", s.serial()}, {"dps", s.dps()}, {"direction", static_cast<int>(s.direction())},
+  return {{"serial", s.serial()},
+          {"dps", s.dps()},
+          {"direction", static_cast<int>(s.direction())},
           {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveSpeedDirection& s) {
@@ -77,12 +88,16 @@ json fields(const teejet::ValveCycleCount& s) {
   return {{"serial", s.serial()}, {"count", s.count()}, {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveBaudRate& s) {
-  return {{"serial", s.serial()}, {"bit_rate", s.bit_rate()}, {"received_ns", u64(s.received_ns())}};
+  return {
+      {"serial", s.serial()}, {"bit_rate", s.bit_rate()}, {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveError& s) {
-  return {{"serial", s.serial()},  {"kind", static_cast<int>(s.kind())},
-          {"value", s.value()},    {"limit", s.limit()},
-          {"direction", static_cast<int>(s.direction())}, {"received_ns", u64(s.received_ns())}};
+  return {{"serial", s.serial()},
+          {"kind", static_cast<int>(s.kind())},
+          {"value", s.value()},
+          {"limit", s.limit()},
+          {"direction", static_cast<int>(s.direction())},
+          {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveCommand& s) {
   return {{"serial", s.serial()},
@@ -98,9 +113,12 @@ json fields(const teejet::ValveCommand& s) {
           {"bit_rate", s.bit_rate()}};
 }
 json fields(const teejet::CommandStatus& s) {
-  return {{"serial", s.serial()},         {"command_id", s.command_id()},
-          {"origin", s.origin().to_string()}, {"kind", static_cast<int>(s.kind())},
-          {"state", static_cast<int>(s.state())}, {"reason", s.reason().to_string()},
+  return {{"serial", s.serial()},
+          {"command_id", s.command_id()},
+          {"origin", s.origin().to_string()},
+          {"kind", static_cast<int>(s.kind())},
+          {"state", static_cast<int>(s.state())},
+          {"reason", s.reason().to_string()},
           {"stamp_ns", u64(s.stamp_ns())}};
 }
 json fields(const teejet::GatewayStatus& s) {

@@ -63,21 +63,22 @@ Result<FileInfo> inspect(const std::string& path) {
     }
     for (const auto& [id, channel] : (*summary)->channels) {
       const auto count = statistics.channel_message_counts.find(id);
-      info.channels.push_back({id, channel.topic, schema_name((*summary)->schemas, channel.schema_id),
-                               count == statistics.channel_message_counts.end() ? 0 : count->second});
+      info.channels.push_back(
+          {id, channel.topic, schema_name((*summary)->schemas, channel.schema_id),
+           count == statistics.channel_message_counts.end() ? 0 : count->second});
     }
   }
   // No summary (a killed recorder): read it through, which also says where it ends.
   std::map<std::uint16_t, std::uint64_t> counts;
   bool first = true;
-  auto contents = mcap::read_messages(*bytes, [&](const mcap::Channel& channel,
-                                                   const mcap::Message& message) {
-    if (*summary) return;
-    ++counts[channel.id];
-    info.start = first ? message.log_time : std::min(info.start, message.log_time);
-    info.end = std::max(info.end, message.log_time);
-    first = false;
-  });
+  auto contents =
+      mcap::read_messages(*bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
+        if (*summary) return;
+        ++counts[channel.id];
+        info.start = first ? message.log_time : std::min(info.start, message.log_time);
+        info.end = std::max(info.end, message.log_time);
+        first = false;
+      });
   if (!contents) return contents.error();
   info.library = contents->header.library;
   if (!contents->incomplete.empty()) {

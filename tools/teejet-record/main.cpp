@@ -51,17 +51,23 @@ std::string parse_size(const std::string& text, std::uint64_t& bytes) {
   }
   const std::string unit = text.substr(used);
   std::uint64_t scale = 1;
-  if (unit == "K" || unit == "k") scale = 1ull << 10;
-  else if (unit == "M" || unit == "m") scale = 1ull << 20;
-  else if (unit == "G" || unit == "g") scale = 1ull << 30;
-  else if (!unit.empty()) return "'" + text + "': unknown unit '" + unit + "' (K, M or G)";
+  if (unit == "K" || unit == "k")
+    scale = 1ull << 10;
+  else if (unit == "M" || unit == "m")
+    scale = 1ull << 20;
+  else if (unit == "G" || unit == "g")
+    scale = 1ull << 30;
+  else if (!unit.empty())
+    return "'" + text + "': unknown unit '" + unit + "' (K, M or G)";
   bytes = number * scale;
   return {};
 }
 
 std::string human_bytes(std::uint64_t bytes) {
-  if (bytes >= (1ull << 20)) return fmt::format("{:.1f} MiB", static_cast<double>(bytes) / (1 << 20));
-  if (bytes >= (1ull << 10)) return fmt::format("{:.1f} KiB", static_cast<double>(bytes) / (1 << 10));
+  if (bytes >= (1ull << 20))
+    return fmt::format("{:.1f} MiB", static_cast<double>(bytes) / (1 << 20));
+  if (bytes >= (1ull << 10))
+    return fmt::format("{:.1f} KiB", static_cast<double>(bytes) / (1 << 10));
   return fmt::format("{} B", bytes);
 }
 
@@ -138,8 +144,8 @@ int main(int argc, char** argv) {
   std::string info_path, max_size_text, chunk_size_text, compression = "zstd";
   double duration_seconds = 0;
   bool json = false, progress_flag = false, quiet = false;
-  auto* output = app.add_option("-o,--output", options.output, "the MCAP file to write")
-                     ->type_name("FILE");
+  auto* output =
+      app.add_option("-o,--output", options.output, "the MCAP file to write")->type_name("FILE");
   auto* info = app.add_option("--info", info_path, "print what a recording holds, and exit")
                    ->type_name("FILE")
                    ->excludes(output);
@@ -165,7 +171,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, teejet::dds::kMaxDomain));
   app.add_option("--profile", options.profile_file, "Fast DDS XML profiles file, as the gateway's")
       ->check(CLI::ExistingFile);
-  app.add_flag("--progress", progress_flag, "show the progress line also when stderr is no terminal");
+  app.add_flag("--progress", progress_flag,
+               "show the progress line also when stderr is no terminal");
   app.add_flag("-q,--quiet", quiet, "no progress line and no summary");
   teejet::command_line::refuse_empty_values(app);
   if (const auto exit_status = teejet::command_line::parse(app, argc, argv, kExitUsage)) {

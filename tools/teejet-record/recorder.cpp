@@ -1,11 +1,11 @@
 #include "recorder.hpp"
 
-#include <fastdds/dds/core/condition/StatusCondition.hpp>
-#include <fastdds/dds/core/condition/WaitSet.hpp>
-#include <fastdds/dds/subscriber/DataReader.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <fastdds/dds/core/condition/StatusCondition.hpp>
+#include <fastdds/dds/core/condition/WaitSet.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fstream>
 #include <memory>
 
@@ -58,10 +58,10 @@ class RecordingFile {
                                                      const std::vector<Subscription>& topics) {
     auto sink = mcap::open_file_sink(path);
     if (!sink) return sink.error();
-    auto writer = mcap::Writer::create(
-        std::move(*sink), {.compression = options.compression,
-                           .chunk_size = options.chunk_size,
-                           .library = "teejet-record " TEEJET_VERSION});
+    auto writer =
+        mcap::Writer::create(std::move(*sink), {.compression = options.compression,
+                                                .chunk_size = options.chunk_size,
+                                                .library = "teejet-record " TEEJET_VERSION});
     if (!writer) return writer.error();
     // Channels (and their schemas) are added with their first message: a topic nobody
     // publishes costs nothing, and each schema carries the whole IDL text.
@@ -94,9 +94,9 @@ class RecordingFile {
     auto schema = schemas_.find(type.type_name);
     if (schema == schemas_.end()) {
       const auto idl = recording::valve_idl();
-      auto added = writer_->add_schema(
-          type.type_name, recording::kSchemaEncoding,
-          {reinterpret_cast<const std::uint8_t*>(idl.data()), idl.size()});
+      auto added =
+          writer_->add_schema(type.type_name, recording::kSchemaEncoding,
+                              {reinterpret_cast<const std::uint8_t*>(idl.data()), idl.size()});
       if (!added) return added.error();
       schema = schemas_.emplace(type.type_name, *added).first;
     }
@@ -174,11 +174,11 @@ class Recording {
       }
       sample.payload = std::move(last->second.payload);
       last_samples_.erase(last);
-    } else if (type.keyed) {
+    } else if (type.keyed && type.durable) {
       last_samples_[key] = LastSample{publish_time, sample.payload};
     }
-    if (auto written = file_->write(topic, type, sample.disposed, log_time, publish_time,
-                                    sample.payload);
+    if (auto written =
+            file_->write(topic, type, sample.disposed, log_time, publish_time, sample.payload);
         !written) {
       return written;
     }
@@ -241,9 +241,8 @@ class Recording {
   }
 
   Status open_next() {
-    const std::string path = options_.max_size == 0
-                                 ? options_.output
-                                 : split_file_name(options_.output, file_index_++);
+    const std::string path =
+        options_.max_size == 0 ? options_.output : split_file_name(options_.output, file_index_++);
     auto file = RecordingFile::open(path, options_, topics_);
     if (!file) return file.error();
     file_ = std::move(*file);
@@ -290,11 +289,11 @@ Result<std::vector<std::string>> select_topics(const std::vector<std::string>& g
 std::string split_file_name(const std::string& output, int index) {
   const auto slash = output.find_last_of('/');
   const auto dot = output.find_last_of('.');
-  const bool has_extension = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  const bool has_extension =
+      dot != std::string::npos && (slash == std::string::npos || dot > slash);
   char number[16];
   std::snprintf(number, sizeof number, "_%03d", index);
-  return has_extension ? output.substr(0, dot) + number + output.substr(dot)
-                       : output + number;
+  return has_extension ? output.substr(0, dot) + number + output.substr(dot) : output + number;
 }
 
 Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>& stop,
@@ -346,8 +345,8 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
     if (now >= end) break;
     const SteadyTime wake = std::min({end, now + kLongestWait, next_flush, next_report});
     eprosima::fastdds::dds::ConditionSeq active;
-    const auto wait = std::chrono::duration_cast<std::chrono::nanoseconds>(
-        std::max(wake - now, Duration{0}));
+    const auto wait =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::max(wake - now, Duration{0}));
     wait_set.wait(active, eprosima::fastrtps::Duration_t(
                               static_cast<std::int32_t>(wait.count() / 1'000'000'000),
                               static_cast<std::uint32_t>(wait.count() % 1'000'000'000)));

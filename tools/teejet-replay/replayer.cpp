@@ -37,16 +37,18 @@ bool is_disposal(const mcap::Channel& channel) {
 bool selected(const ReplayOptions& options, const std::string& topic) {
   if (topic == dds::topics::kCommand && !options.with_commands) return false;
   return options.topics.empty() ||
-         std::any_of(options.topics.begin(), options.topics.end(),
-                     [&](const std::string& glob) { return recording::topic_matches(glob, topic); });
+         std::any_of(options.topics.begin(), options.topics.end(), [&](const std::string& glob) {
+           return recording::topic_matches(glob, topic);
+         });
 }
 
 // Every channel of the file checked against the catalog before anything is published.
-Status check_channel(const mcap::Channel& channel, const std::map<std::uint16_t, mcap::Schema>& schemas) {
+Status check_channel(const mcap::Channel& channel,
+                     const std::map<std::uint16_t, mcap::Schema>& schemas) {
   const std::string where = "channel " + std::to_string(channel.id) + " '" + channel.topic + "'";
   if (channel.message_encoding != recording::kMessageEncoding) {
-    return Error{ErrorCode::kInvalidValue, where + ": message encoding '" +
-                                               channel.message_encoding + "', not 'cdr'"};
+    return Error{ErrorCode::kInvalidValue,
+                 where + ": message encoding '" + channel.message_encoding + "', not 'cdr'"};
   }
   const auto schema = schemas.find(channel.schema_id);
   if (schema == schemas.end()) {
@@ -57,11 +59,12 @@ Status check_channel(const mcap::Channel& channel, const std::map<std::uint16_t,
   if (type == nullptr) {
     return Error{ErrorCode::kInvalidValue, where + ": '" + topic + "' is not a teejet topic"};
   }
-  if (schema->second.name != type->type_name || schema->second.encoding != recording::kSchemaEncoding) {
-    return Error{ErrorCode::kInvalidValue,
-                 where + ": schema '" + schema->second.name + "' (" + schema->second.encoding +
-                     ") is not the one this replayer knows for " + topic + ": '" +
-                     type->type_name + "' (omgidl)"};
+  if (schema->second.name != type->type_name ||
+      schema->second.encoding != recording::kSchemaEncoding) {
+    return Error{ErrorCode::kInvalidValue, where + ": schema '" + schema->second.name + "' (" +
+                                               schema->second.encoding +
+                                               ") is not the one this replayer knows for " + topic +
+                                               ": '" + type->type_name + "' (omgidl)"};
   }
   return {};
 }
@@ -73,9 +76,10 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   if (!bytes) return bytes.error();
   // The first pass checks the file and finds its channels and first time.
   std::uint64_t first_time = UINT64_MAX;
-  auto contents = mcap::read_messages(*bytes, [&](const mcap::Channel&, const mcap::Message& message) {
-    first_time = std::min(first_time, message.log_time);
-  });
+  auto contents =
+      mcap::read_messages(*bytes, [&](const mcap::Channel&, const mcap::Message& message) {
+        first_time = std::min(first_time, message.log_time);
+      });
   if (!contents) return Error{contents.error().code, options.file + ": " + contents.error().reason};
   if (!contents->incomplete.empty()) {
     // Still replayable: a killed recorder's file up to its last complete chunk.
@@ -108,9 +112,9 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
 
   ReplayReport report;
   if (routes.empty()) {
-    return Error{ErrorCode::kInvalidValue, options.file + ": no channel to replay" +
-                                               (options.topics.empty() ? std::string()
-                                                                       : " matches --topic")};
+    return Error{ErrorCode::kInvalidValue,
+                 options.file + ": no channel to replay" +
+                     (options.topics.empty() ? std::string() : " matches --topic")};
   }
   const SteadyTime give_up = std::chrono::steady_clock::now() + options.wait_for_readers;
   while (!stop && std::chrono::steady_clock::now() < give_up &&
@@ -124,40 +128,40 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
       options.end ? first_time + static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
   do {
     const SteadyTime wall_start = std::chrono::steady_clock::now();
-    auto pass = mcap::read_messages(*bytes, [&](const mcap::Channel& channel,
-                                                const mcap::Message& message) {
-      if (stop) return;
-      const auto route = routes.find(channel.id);
-      if (route == routes.end() || message.log_time < start_ns || message.log_time > end_ns) {
-        return;
-      }
-      const auto offset = std::chrono::duration<double, std::nano>(
-          static_cast<double>(message.log_time - start_ns) / options.rate);
-      const SteadyTime due = wall_start + std::chrono::duration_cast<Duration>(offset);
-      // Sleep in slices, so that a signal is noticed during a long gap.
-      for (SteadyTime now = std::chrono::steady_clock::now(); now < due && !stop;
-           now = std::chrono::steady_clock::now()) {
-        std::this_thread::sleep_until(std::min(due, now + kStopCheck));
-      }
-      if (stop) return;
-      const Duration late = std::chrono::steady_clock::now() - due;
-      if (late > report.worst_lateness) {
-        report.worst_lateness = late;
-        report.worst_index = report.published + report.failed + 1;
-      }
-      if (late > 1ms) ++report.late_over_1ms;
-      const auto& [writer, disposed, topic] = route->second;
-      const Status published = disposed ? writer->dispose(message.data, message.publish_time)
-                                        : writer->write(message.data, message.publish_time);
-      if (!published) {
-        ++report.failed;
-        report.last_failure = topic + " #" + std::to_string(message.sequence) + ": " +
-                              published.error().reason;
-        return;
-      }
-      ++report.published;
-      ++report.per_topic[topic];
-    });
+    auto pass = mcap::read_messages(
+        *bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
+          if (stop) return;
+          const auto route = routes.find(channel.id);
+          if (route == routes.end() || message.log_time < start_ns || message.log_time > end_ns) {
+            return;
+          }
+          const auto offset = std::chrono::duration<double, std::nano>(
+              static_cast<double>(message.log_time - start_ns) / options.rate);
+          const SteadyTime due = wall_start + std::chrono::duration_cast<Duration>(offset);
+          // Sleep in slices, so that a signal is noticed during a long gap.
+          for (SteadyTime now = std::chrono::steady_clock::now(); now < due && !stop;
+               now = std::chrono::steady_clock::now()) {
+            std::this_thread::sleep_until(std::min(due, now + kStopCheck));
+          }
+          if (stop) return;
+          const Duration late = std::chrono::steady_clock::now() - due;
+          if (late > report.worst_lateness) {
+            report.worst_lateness = late;
+            report.worst_index = report.published + report.failed + 1;
+          }
+          if (late > 1ms) ++report.late_over_1ms;
+          const auto& [writer, disposed, topic] = route->second;
+          const Status published = disposed ? writer->dispose(message.data, message.publish_time)
+                                            : writer->write(message.data, message.publish_time);
+          if (!published) {
+            ++report.failed;
+            report.last_failure =
+                topic + " #" + std::to_string(message.sequence) + ": " + published.error().reason;
+            return;
+          }
+          ++report.published;
+          ++report.per_topic[topic];
+        });
     if (!pass) return pass.error();
     ++report.loops;
   } while (options.loop && !stop);

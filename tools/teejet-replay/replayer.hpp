@@ -35,7 +35,7 @@ struct ReplayReport {
   std::uint64_t failed = 0;  // writes or disposals the middleware refused
   std::map<std::string, std::uint64_t> per_topic;
   std::string last_failure;
-  Duration worst_lateness{};  // how far behind its time the latest message went out
+  Duration worst_lateness{};      // how far behind its time the latest message went out
   std::uint64_t worst_index = 0;  // which message that was (1 = the first published)
   std::uint64_t late_over_1ms = 0;
   int loops = 0;

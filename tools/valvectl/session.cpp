@@ -230,9 +230,8 @@ class Session {
       return kExitFailure;
     }
     CommandClient& client = **made;
-    const auto connected =
-        client.connect(expected_gateways, invocation_.global.command_readers, after_timeout(),
-                       terminal_.interrupted);
+    const auto connected = client.connect(expected_gateways, invocation_.global.command_readers,
+                                          after_timeout(), terminal_.interrupted);
     if (!connected) {
       complain(connected.error().reason);
       return kExitFailure;

@@ -1,5 +1,6 @@
 #include "teejet/recording/catalog.hpp"
 
+#include <fastdds/rtps/common/SerializedPayload.h>
 #include <fnmatch.h>
 
 #include <algorithm>
@@ -7,7 +8,6 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "teejet/dds/topics.hpp"
 
@@ -56,8 +56,7 @@ DataReaderQos recorder_qos(Kind kind) {
   qos.history().kind = KEEP_LAST_HISTORY_QOS;
   qos.history().depth = std::max(qos.history().depth, depth);
   qos.resource_limits().max_samples_per_instance = qos.history().depth;
-  qos.resource_limits().max_samples =
-      qos.resource_limits().max_instances * qos.history().depth;
+  qos.resource_limits().max_samples = qos.resource_limits().max_instances * qos.history().depth;
   return qos;
 }
 
@@ -93,8 +92,8 @@ eprosima::fastrtps::Time_t from_ns(std::uint64_t ns) {
 }
 
 Error dds_error(const std::string& what, const ReturnCode_t& code) {
-  return Error{ErrorCode::kDds, what + " (Fast DDS return code " +
-                                    std::to_string(static_cast<int>(code())) + ")"};
+  return Error{ErrorCode::kDds,
+               what + " (Fast DDS return code " + std::to_string(static_cast<int>(code())) + ")"};
 }
 
 template <class Sample>
@@ -171,9 +170,9 @@ class TypedWriter final : public TopicWriter {
     payload.length = static_cast<std::uint32_t>(bytes.size());
     // fastcdr throws on a payload that ends early; the type support turns that into false.
     if (bytes.size() < 4 || !type_.deserialize(&payload, &sample)) {
-      return Error{ErrorCode::kInvalidValue,
-                   "a " + std::to_string(bytes.size()) + "-byte payload is not a CDR " +
-                       std::string(type_.getName())};
+      return Error{ErrorCode::kInvalidValue, "a " + std::to_string(bytes.size()) +
+                                                 "-byte payload is not a CDR " +
+                                                 std::string(type_.getName())};
     }
     return {};
   }
@@ -209,12 +208,11 @@ TopicType entry(const char* type_name, bool keyed = true) {
       .topic = dds::topics::TopicOf<Sample>::kName,
       .type_name = type_name,
       .keyed = keyed,
-      .open_reader = [](dds::Participant& participant) {
-        return open_reader<Sample>(participant, kKind);
-      },
-      .open_writer = [](dds::Participant& participant) {
-        return open_writer<Sample>(participant, kKind);
-      }};
+      .durable = kKind == Kind::kState || kKind == Kind::kCommandStatus,
+      .open_reader =
+          [](dds::Participant& participant) { return open_reader<Sample>(participant, kKind); },
+      .open_writer =
+          [](dds::Participant& participant) { return open_writer<Sample>(participant, kKind); }};
 }
 
 }  // namespace

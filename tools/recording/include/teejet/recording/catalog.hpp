@@ -71,6 +71,9 @@ struct TopicType {
   std::string topic;      // "teejet/valve/position"
   std::string type_name;  // "teejet::ValvePosition": the schema name
   bool keyed = true;
+  // TRANSIENT_LOCAL: its instances' last values are state (a split file starts with them);
+  // commands and frames are events.
+  bool durable = true;
   // With the QoS the topic's real readers and writers use (docs/topics.md), deeper where a
   // recorder must not lose what it is slow to take.
   Result<std::unique_ptr<TopicReader>> (*open_reader)(dds::Participant&) = nullptr;
