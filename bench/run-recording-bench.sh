@@ -67,7 +67,7 @@ frames = counts.get("teejet/can/frame", 0)
 print(f"RECORDING compression={sys.argv[7]} seconds={info['duration_s']:.1f} "
       f"messages={info['messages']} rate={info['messages'] / info['duration_s']:.0f}/s "
       f"frames={frames / info['duration_s']:.0f}/s recorder_cpu={100 * rec_ticks / hz / seconds:.1f}% "
-      f"(up to start-up) recorder_peak_rss={rss}KiB gateway_cpu={100 * gw_ticks / hz / seconds:.1f}% "
+      f"recorder_peak_rss={rss}KiB gateway_cpu={100 * gw_ticks / hz / seconds:.1f}% "
       f"file={info['size']}B per_minute={info['size'] / info['duration_s'] * 60 / 2**20:.2f}MiB "
       f"chunks={info['chunks']}")
 PY

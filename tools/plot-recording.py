@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Plots the valve positions (and, on request, another telemetry field) of a teejet-record
 recording to a PNG, as Foxglove's Plot panel would show them.
 
@@ -6,7 +6,7 @@ The recording is read by the independent MCAP reader (tests/mcap-js/read-mcap.mj
 and Foxglove's own omgidl/cdr decoders, installed by tools/install-deps.sh), so the picture shows
 what another tool makes of the file, not what our own reader thinks is in it.
 
-  tools/plot-recording.py run.mcap -o run.png
+  tools/plot-recording.py run.mcap -o run.png     (Debian's python3, for python3-matplotlib)
   tools/plot-recording.py run.mcap -o run.png --field teejet/valve/current:amps --serial 1 --serial 2
 """
 
