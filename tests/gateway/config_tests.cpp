@@ -97,7 +97,7 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
   EXPECT_EQ(error_of("gateway:\n  nmae: x\n"),
             "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "
             "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change, "
-            "receive_coalesce_us, reject_unknown_serials)");
+            "receive_coalesce_us, reject_unknown_serials, record_frames)");
   EXPECT_EQ(error_of("polling: {}\n"),
             "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, valves, "
             "simulator)");

@@ -20,6 +20,7 @@
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
+#include "teejet/dds/frame_publisher.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::gateway {
@@ -177,6 +178,32 @@ TEST(RecordFrames, WithoutTheOptionNoFrameWriterExists) {
   EXPECT_EQ(matched.current_count, 0);
   std::vector<Received> all;
   EXPECT_TRUE(take_frames(frames, all).empty());
+}
+
+// The one conversion between codec::CanFrame and the IDL's BusFrame, without DDS.
+TEST(ToBusFrame, CarriesTheWireAndNothingElse) {
+  const Timestamp stamp = from_unix_nanoseconds(1'700'000'000'123'456'789);
+  const codec::CanFrame stop{.id = 0x18EFD9D5, .dlc = 1, .data = {0x00, 0xAA, 0xAA}};
+  const auto sent = dds::to_bus_frame(stop, can::FrameDirection::kSent, stamp, "gw", "can0");
+  EXPECT_EQ(sent.gateway().to_string(), "gw");
+  EXPECT_EQ(sent.can_interface().to_string(), "can0");
+  EXPECT_EQ(sent.id(), 0x18EFD9D5u);
+  EXPECT_TRUE(sent.extended());
+  EXPECT_EQ(sent.dlc(), 1);
+  EXPECT_EQ(sent.data(), std::vector<std::uint8_t>{0x00});  // dlc bytes, not the array
+  EXPECT_EQ(sent.direction(), FRAME_SENT);
+  EXPECT_EQ(sent.stamp_ns(), 1'700'000'000'123'456'789u);
+
+  const codec::CanFrame remote{.id = 0x123, .extended = false, .remote = true, .dlc = 4};
+  const auto request = dds::to_bus_frame(remote, can::FrameDirection::kReceived, stamp, "gw", "x");
+  EXPECT_EQ(request.direction(), FRAME_RECEIVED);
+  EXPECT_FALSE(request.extended());
+  EXPECT_EQ(request.dlc(), 4);
+  EXPECT_TRUE(request.data().empty());  // a remote frame carries no data
+
+  const std::string long_name(100, 'g');
+  const auto cut = dds::to_bus_frame(stop, can::FrameDirection::kSent, stamp, long_name, "can0");
+  EXPECT_EQ(cut.gateway().to_string(), std::string(64, 'g'));  // the IDL's string<64>
 }
 
 TEST(RecordFramesConfig, OffByDefaultAndReadFromTheGatewaySection) {

@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
+#include <span>
 
 #include "teejet/dds/topics.hpp"
 
@@ -17,8 +19,10 @@ BusFrame to_bus_frame(const codec::CanFrame& frame, can::FrameDirection directio
   sample.can_interface(can_interface);
   sample.id(frame.id);
   sample.extended(frame.extended);
-  // A remote frame's dlc asks for bytes that it does not carry.
-  const auto payload = frame.remote ? std::span<const std::uint8_t>{} : frame.payload();
+  // A remote frame's dlc asks for bytes that it does not carry; no classic frame carries more
+  // than eight, whatever a driver put in dlc.
+  const std::size_t length = frame.remote ? 0 : std::min<std::size_t>(frame.dlc, 8);
+  const std::span<const std::uint8_t> payload(frame.data.data(), length);
   sample.dlc(frame.dlc);
   sample.data().assign(payload.begin(), payload.end());
   sample.direction(direction == can::FrameDirection::kSent ? teejet::FRAME_SENT
