@@ -28,8 +28,8 @@ enum class Kind {
 // The recorder's readers keep this many samples per instance that it has not taken yet: a
 // state writer keeps only the last, but a recorder must not lose the one before it while it
 // writes a chunk. Bounded, so that a stalled recorder cannot eat memory without limit.
+// Frames keep the frame reader's own QoS (best effort, 8192 held: about 3 s of a full bus).
 constexpr std::int32_t kRecorderDepth = 64;
-constexpr std::int32_t kRecorderFrameDepth = 4096;
 
 DataReaderQos recorder_qos(Kind kind) {
   DataReaderQos qos;
@@ -47,9 +47,7 @@ DataReaderQos recorder_qos(Kind kind) {
       qos.durability().kind = VOLATILE_DURABILITY_QOS;
       break;
     case Kind::kFrame:
-      qos = dds::topics::state_reader_qos();
-      qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-      qos.durability().kind = VOLATILE_DURABILITY_QOS;
+      qos = dds::topics::frame_reader_qos();
       break;
   }
   const std::int32_t depth = kind == Kind::kFrame ? kRecorderFrameDepth : kRecorderDepth;
@@ -68,15 +66,8 @@ DataWriterQos replayer_qos(Kind kind) {
       return dds::topics::status_writer_qos();
     case Kind::kCommand:
       return dds::topics::command_writer_qos();
-    case Kind::kFrame: {
-      auto qos = dds::topics::state_writer_qos();
-      qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-      qos.durability().kind = VOLATILE_DURABILITY_QOS;
-      qos.history().depth = kRecorderFrameDepth;
-      qos.resource_limits().max_samples_per_instance = kRecorderFrameDepth;
-      qos.resource_limits().max_samples = kRecorderFrameDepth;
-      return qos;
-    }
+    case Kind::kFrame:
+      return dds::topics::frame_writer_qos();
   }
   return {};
 }
