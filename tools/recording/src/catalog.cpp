@@ -47,12 +47,10 @@ DataReaderQos recorder_qos(Kind kind) {
       qos.durability().kind = VOLATILE_DURABILITY_QOS;
       break;
     case Kind::kFrame:
-      qos = dds::topics::frame_reader_qos();
-      break;
+      return dds::topics::frame_reader_qos();
   }
-  const std::int32_t depth = kind == Kind::kFrame ? kRecorderFrameDepth : kRecorderDepth;
   qos.history().kind = KEEP_LAST_HISTORY_QOS;
-  qos.history().depth = std::max(qos.history().depth, depth);
+  qos.history().depth = std::max(qos.history().depth, kRecorderDepth);
   qos.resource_limits().max_samples_per_instance = qos.history().depth;
   qos.resource_limits().max_samples = qos.resource_limits().max_instances * qos.history().depth;
   return qos;
