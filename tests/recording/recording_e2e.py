@@ -285,9 +285,17 @@ def case_record(run):
         expected = (f"({stamp // 10**9:010d}.{stamp // 1000 % 10**6:06d}) "
                     f"{frame['can_interface']} {ident}#{body}")
         check(line == expected, f"candump: '{line}' != '{expected}'")
+    # valve-decode reads the recording's frame channel as it reads the candump text of it.
+    decode = run.binary("tools/valve-decode/valve-decode")
+    from_mcap = run.run([decode, recording]).stdout
+    from_log = run.run([decode, run.path("run.log")]).stdout
+    check(from_mcap == from_log and from_mcap.count("\n") == len(frames),
+          f"valve-decode: {from_mcap.count(chr(10))} lines from the MCAP file, "
+          f"{from_log.count(chr(10))} from its candump text; they differ or miss frames")
     print(f"record: {len(messages)} messages on {len(counts)} channels equal to the subscriber's "
           f"({missed} early sample(s) one of them missed by matching the gateway later); "
-          f"{len(lines)} candump lines; counts {json.dumps(counts, sort_keys=True)}")
+          f"{len(lines)} candump lines, valve-decode equal on both; "
+          f"counts {json.dumps(counts, sort_keys=True)}")
 
 
 def case_sigkill(run):
