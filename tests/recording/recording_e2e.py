@@ -408,11 +408,44 @@ def case_split(run):
           f"together {len(live)} messages equal to the subscriber's")
 
 
+def case_late(run):
+    """A recorder started long after the gateway still gets every valve's state at once: the
+    presence, telemetry and latched error of each valve and the gateway's status, published
+    before it existed (TRANSIENT_LOCAL with the topics' own QoS)."""
+    gateway = run.start_gateway()
+    run.valvectl("list", "--wait-for", "4", "--timeout", "20")
+    run.valvectl("move", "TJV000002", "--to", "30", "--speed", "100", "--wait", "--timeout", "20")
+    started_ns = time.time_ns()
+    recorder = run.start_recorder("late.mcap", ["--duration", "1"])
+    check(recorder.wait(timeout=30) == 0, "teejet-record --duration 1 did not exit 0")
+    run.stop(gateway, signal.SIGTERM)
+    messages, _ = run.read_mcap(run.path("late.mcap"))
+    early = [m for m in messages if int(m["publish_time"]) < started_ns]
+
+    def serials(samples, topic):
+        return {m["data"]["serial"] for m in samples if m["topic"] == topic}
+    # Published once (version, the error) or on change (presence): only a late joiner's copy
+    # of the writer's history can bring them.
+    for topic in ("teejet/valve/presence", "teejet/valve/version"):
+        check(serials(early, topic) == {1, 2, 3, 4},
+              f"late: {topic} published before the recorder started: "
+              f"valves {sorted(serials(early, topic))}")
+    check(serials(early, "teejet/valve/error") == {3},
+          "late: the latched error of TJV000003 (published at start) is missing")
+    for topic in ("teejet/valve/position", "teejet/valve/voltage", "teejet/gateway/status"):
+        check(any(m["topic"] == topic for m in messages), f"late: nothing on {topic}")
+    positions = [m["data"]["degrees"] for m in messages
+                 if m["topic"] == "teejet/valve/position" and m["data"]["serial"] == 2]
+    check(abs(positions[0] - 30) <= 1, f"late: TJV000002 first recorded at {positions[0]}, not 30")
+    print(f"late: a recorder started after the gateway got {len(early)} samples published "
+          f"before it existed: every valve's presence, telemetry and latched error, the status")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--build-dir", required=True)
     parser.add_argument("--npm-reader", required=True)
-    parser.add_argument("case", choices=["record", "sigkill", "replay", "split"])
+    parser.add_argument("case", choices=["record", "sigkill", "replay", "split", "late"])
     args = parser.parse_args()
     if subprocess.run(["node", "--version"], capture_output=True).returncode != 0 or \
             not os.path.isdir(os.path.join(os.path.dirname(args.npm_reader), "node_modules")):
@@ -422,7 +455,7 @@ def main():
         run = Run(args, work)
         try:
             {"record": case_record, "sigkill": case_sigkill, "replay": case_replay,
-             "split": case_split}[args.case](run)
+             "split": case_split, "late": case_late}[args.case](run)
         except (Failure, subprocess.TimeoutExpired) as failure:
             print(f"FAIL: {failure}")
             for name in sorted(os.listdir(work)):
