@@ -9,6 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "info.hpp"
 #include "recorder.hpp"
@@ -90,10 +91,10 @@ class RecordingFiles : public ::testing::Test {
     return {status, out.str(), err.str()};
   }
 
-  Result<replay::ReplayReport> replay_file(const std::string& path) {
-    replay::ReplayOptions options;
+  Result<replay::ReplayReport> replay_file(const std::string& path,
+                                           replay::ReplayOptions options = {}) {
     options.file = path;
-    options.rate = 100;
+    if (options.rate == 1.0) options.rate = 100;
     options.wait_for_readers = std::chrono::milliseconds(0);
     options.domain = kDomain;
     std::atomic<bool> stop{false};
@@ -201,6 +202,86 @@ TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
   EXPECT_EQ(replayed->failed, 3u);
   EXPECT_EQ(replayed->last_failure,
             "teejet/valve/position #3: a 5-byte payload is not a CDR teejet::ValvePosition");
+}
+
+TEST_F(RecordingFiles, StartAndEndPickAWindowOfTheRecording) {
+  // 12 messages 1 ms apart: 5 ms to 8 ms in are the 6th to the 9th.
+  const auto path = save("window.mcap", make_file({}));
+  replay::ReplayOptions options;
+  options.start = std::chrono::milliseconds(5);
+  options.end = std::chrono::milliseconds(8);
+  const auto replayed = replay_file(path, options);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 4u);
+}
+
+TEST_F(RecordingFiles, TheRateScalesTheRecordedGaps) {
+  // 11 ms of recording at rate 0.1 takes 110 ms, at rate 100 about 0.1 ms.
+  const auto path = save("rate.mcap", make_file({}));
+  replay::ReplayOptions slow;
+  slow.rate = 0.1;
+  const auto before = std::chrono::steady_clock::now();
+  const auto replayed = replay_file(path, slow);
+  const auto took = std::chrono::steady_clock::now() - before;
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 12u);
+  EXPECT_GE(took, std::chrono::milliseconds(110));
+}
+
+TEST_F(RecordingFiles, LoopStartsAgainUntilStopped) {
+  const auto path = save("loop.mcap", make_file({}));
+  replay::ReplayOptions options;
+  options.file = path;
+  options.loop = true;
+  options.rate = 10;  // 1.1 ms a pass
+  options.wait_for_readers = std::chrono::milliseconds(0);
+  options.domain = kDomain;
+  std::atomic<bool> stop{false};
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    stop = true;
+  });
+  const auto replayed = replay::replay(options, stop);
+  stopper.join();
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_GE(replayed->loops, 3);
+  EXPECT_GE(replayed->published, 36u);
+}
+
+TEST_F(RecordingFiles, TopicGlobsChooseWhatIsReplayed) {
+  const auto path = save("topics.mcap", make_file({}));
+  replay::ReplayOptions options;
+  options.topics = {"teejet/valve/voltage"};
+  const auto none = replay_file(path, options);
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.error().reason, path + ": no channel to replay matches --topic");
+  options.topics = {"teejet/valve/pos*"};
+  const auto some = replay_file(path, options);
+  ASSERT_TRUE(some.ok()) << some.error().reason;
+  EXPECT_EQ(some->published, 12u);
+}
+
+TEST_F(RecordingFiles, CommandsAreReplayedOnlyWhenAsked) {
+  ValveCommand command;
+  command.serial(1);
+  command.kind(COMMAND_STOP);
+  ValveCommandPubSubType type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&command)());
+  ASSERT_TRUE(type.serialize(&command, &payload));
+  const auto path =
+      save("commands.mcap",
+           make_file({.schema = "teejet::ValveCommand",
+                      .topic = "teejet/valve/command",
+                      .messages = 2,
+                      .payload_override = Bytes(payload.data, payload.data + payload.length)}));
+  const auto refused = replay_file(path);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().reason, path + ": no channel to replay");
+  replay::ReplayOptions options;
+  options.with_commands = true;
+  const auto replayed = replay_file(path, options);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 2u);
 }
 
 TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
