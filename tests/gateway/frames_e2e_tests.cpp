@@ -33,6 +33,7 @@ using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 using fixture::make_gateway;
 using fixture::sim_config;
+using fixture::start_and_wait_online;
 using teejet::testing::eventually;
 using teejet::testing::move_to;
 using teejet::testing::test_domain;
@@ -70,18 +71,6 @@ const Received* find(const std::vector<Received>& all, std::uint32_t id, FrameDi
   return nullptr;
 }
 
-void start_and_wait_online(Gateway& gateway, std::size_t valves) {
-  ASSERT_TRUE(gateway.start());
-  ASSERT_TRUE(eventually(
-      [&] {
-        const auto known = gateway.bridge().valves();
-        return known.size() == valves &&
-               std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
-      },
-      15s))
-      << "the gateway never saw its simulated valves";
-}
-
 TEST(RecordFrames, EveryFrameOfTheBusReachesTheTopicWithTheBytesOfTheSheet) {
   const std::uint64_t before = now_ns();
   auto config = sim_config("gw-frames", 2);
@@ -91,7 +80,7 @@ TEST(RecordFrames, EveryFrameOfTheBusReachesTheTopicWithTheBytesOfTheSheet) {
   ASSERT_NE(frames, nullptr);
   auto gateway_owner = make_gateway(config);
   Gateway& gateway = *gateway_owner;
-  start_and_wait_online(gateway, 2);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(gateway, 2));
 
   // (a) I'm Here, once a second from each valve: serial 1 took 0xD8, serial 2 0xD9. Part number
   // 0 in bytes 1-3, the serial in bytes 4-6, run mode 0 (application code) in byte 7.
@@ -163,7 +152,7 @@ TEST(RecordFrames, WithoutTheOptionNoFrameWriterExists) {
   ASSERT_NE(frames, nullptr);
   auto gateway_owner = make_gateway(config);
   Gateway& gateway = *gateway_owner;
-  start_and_wait_online(gateway, 2);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(gateway, 2));
 
   // The gateway is discovered and its endpoints matched: presence arrives and a command
   // completes. The frame reader still matched nothing and holds nothing.

@@ -47,15 +47,7 @@ using teejet::testing::move_to;
 class GatewayE2E : public ::testing::Test {
  protected:
   void start(Gateway& gateway, std::size_t valves) {
-    ASSERT_TRUE(gateway.start());
-    ASSERT_TRUE(eventually(
-        [&] {
-          const auto known = gateway.bridge().valves();
-          return known.size() == valves &&
-                 std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
-        },
-        15s))
-        << "the gateway never saw its simulated valves";
+    ASSERT_NO_FATAL_FAILURE(fixture::start_and_wait_online(gateway, valves));
   }
 };
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "bus_backend.hpp"
 #include "gateway.hpp"
+#include "support/eventually.hpp"
 #include "support/test_domain.hpp"
 #include "support/valve_commands.hpp"
 #include "teejet/can/virtual_bus.hpp"
@@ -38,6 +40,21 @@ inline std::unique_ptr<Gateway> make_gateway(const GatewayConfig& config) {
   auto backend = make_bus_backend(config);
   EXPECT_TRUE(backend) << backend.error().reason;
   return std::make_unique<Gateway>(config, backend ? std::move(*backend) : BusBackend{});
+}
+
+// Starts `gateway` and waits until its bridge knows `valves` valves, all online. Call it with
+// ASSERT_NO_FATAL_FAILURE.
+inline void start_and_wait_online(Gateway& gateway, std::size_t valves) {
+  using namespace std::chrono_literals;
+  ASSERT_TRUE(gateway.start());
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] {
+        const auto known = gateway.bridge().valves();
+        return known.size() == valves &&
+               std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
+      },
+      15s))
+      << "the gateway never saw its simulated valves";
 }
 
 // Where a simulated valve really is: what the wire should have made it do.

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "gateway_fixture.hpp"
+#include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
 #include "teejet/can/virtual_bus.hpp"
@@ -44,25 +45,12 @@ using fixture::sim_config;
 using fixture::watch_wire;
 using teejet::testing::command;
 using teejet::testing::move_to;
-
-std::vector<CommandState> states(const std::vector<CommandStatus>& statuses) {
-  std::vector<CommandState> out;
-  for (const auto& s : statuses) out.push_back(s.state());
-  return out;
-}
+using Peer = teejet::testing::DdsPeer;
 
 class GatewayE2E : public ::testing::Test {
  protected:
   void start(Gateway& gateway, std::size_t valves) {
-    ASSERT_TRUE(gateway.start());
-    ASSERT_TRUE(eventually(
-        [&] {
-          const auto known = gateway.bridge().valves();
-          return known.size() == valves &&
-                 std::all_of(known.begin(), known.end(), [](auto& v) { return v.online; });
-        },
-        15s))
-        << "the gateway never saw its simulated valves";
+    ASSERT_NO_FATAL_FAILURE(fixture::start_and_wait_online(gateway, valves));
   }
 };
 
@@ -235,7 +223,7 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   auto zero_ms = command(1, COMMAND_MILLISECONDS_TO_RUN);
   zero_ms.milliseconds(0);
   auto statuses = run(zero_ms);
-  EXPECT_EQ(states(statuses), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(statuses), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   EXPECT_EQ(statuses[0].origin().to_string(), origin) << "the 64-character origin is echoed whole";
   EXPECT_EQ(commands_on(*wire),
             (std::vector<Expected>{{0xD8, codec::MillisecondsToRun{100, Direction::kOpen, 0}}}));
@@ -246,9 +234,9 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   EXPECT_TRUE(hostile.write(from(origin, ++id, longest)));
   const auto longest_id = id;
   ASSERT_TRUE(eventually([&] { return !hostile.of(origin, longest_id).empty(); }, 15s));
-  EXPECT_EQ(states(run(command(1, COMMAND_STOP))),
+  EXPECT_EQ(Peer::states(run(command(1, COMMAND_STOP))),
             (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
-  EXPECT_EQ(states(hostile.of(origin, longest_id)),
+  EXPECT_EQ(Peer::states(hostile.of(origin, longest_id)),
             (std::vector{COMMAND_ACCEPTED, COMMAND_SUPERSEDED}));
   EXPECT_EQ(commands_on(*wire),
             (std::vector<Expected>{{0xD8, codec::MillisecondsToRun{100, Direction::kOpen, 65535}},
@@ -260,9 +248,10 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   auto still = move_to(1, 60.0f);
   still.speed_percent(0);
   const double before_speed_zero = position_of(gateway, 1);
-  EXPECT_EQ(states(run(still)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(run(still)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   const double after_speed_zero = position_of(gateway, 1);
-  EXPECT_EQ(states(run(move_to(1, 90.0f))), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(run(move_to(1, 90.0f))),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   EXPECT_NEAR(position_of(gateway, 1), 90.0, 1.0);
   EXPECT_EQ(commands_on(*wire),
             (std::vector<Expected>{
@@ -275,14 +264,14 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   version.telemetry(TELEMETRY_VERSION);
   version.resend_tenths(1);
   statuses = run(version);
-  ASSERT_EQ(states(statuses), std::vector{COMMAND_REJECTED});
+  ASSERT_EQ(Peer::states(statuses), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(statuses[0].reason().to_string(),
             "request: version is sent once; resend_tenths must be 0");
   // The slowest resend the sheet allows, 25.5 s: answered once now.
   auto slowest = command(1, COMMAND_REQUEST);
   slowest.telemetry(TELEMETRY_TEMPERATURE);
   slowest.resend_tenths(255);
-  EXPECT_EQ(states(run(slowest)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(run(slowest)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   EXPECT_EQ(commands_on(*wire), (std::vector<Expected>{{0xD8, codec::RequestTemperature{255}}}));
 }
 
@@ -306,10 +295,11 @@ TEST_F(GatewayE2E, AnUnknownSerialIsIgnoredOnASharedDomainAndRejectedWhenConfigu
     ASSERT_TRUE(hostile.write(from("ecu", 1, move_to(99, 10.0f))));
     // The next command's final status comes after any status of the first: one writer, in order.
     ASSERT_TRUE(hostile.write(from("ecu", 2, command(1, COMMAND_STOP))));
-    EXPECT_EQ(states(hostile.follow("ecu", 2)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+    EXPECT_EQ(Peer::states(hostile.follow("ecu", 2)),
+              (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
     const auto unknown = hostile.of("ecu", 1);
     if (reject) {
-      ASSERT_EQ(states(unknown), std::vector{COMMAND_REJECTED});
+      ASSERT_EQ(Peer::states(unknown), std::vector{COMMAND_REJECTED});
       EXPECT_EQ(unknown[0].reason().to_string(),
                 "no valve TJV000099 on this gateway's bus (sim:1)");
     } else {
@@ -333,12 +323,12 @@ TEST_F(GatewayE2E, OnlyTheGatewayThatOwnsASerialActsOnIt) {
   const auto right_wire = watch_wire(*right_owner);
   Commander ecu("two-gateways-ecu");
   ASSERT_TRUE(ecu.write(from("ecu", 1, move_to(102, 20.0f)), 2));
-  EXPECT_EQ(states(ecu.follow("ecu", 1)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(ecu.follow("ecu", 1)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   // A later command to the left gateway's valve: once it is final, anything the left gateway
   // wrote about the first would have come before it.
   ASSERT_TRUE(ecu.write(from("ecu", 2, command(1, COMMAND_STOP)), 2));
-  EXPECT_EQ(states(ecu.follow("ecu", 2)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
-  EXPECT_EQ(states(ecu.of("ecu", 1)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}))
+  EXPECT_EQ(Peer::states(ecu.follow("ecu", 2)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(ecu.of("ecu", 1)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}))
       << "exactly one gateway wrote statuses for TJV000102";
   using Expected = std::vector<std::pair<std::uint8_t, codec::ToValveMessage>>;
   EXPECT_EQ(commands_on(*right_wire),
@@ -366,7 +356,8 @@ TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
     EXPECT_TRUE(ecu.write(from("ecu", id, move_to(2, degrees))));
     EXPECT_TRUE(ecu.first("ecu", id, 15s));
     const auto latency = std::chrono::steady_clock::now() - sent;
-    EXPECT_EQ(states(ecu.follow("ecu", id)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+    EXPECT_EQ(Peer::states(ecu.follow("ecu", id)),
+              (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
     return std::chrono::duration<double, std::milli>(latency).count();
   };
   std::vector<double> idle;
@@ -374,7 +365,8 @@ TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
   std::sort(idle.begin(), idle.end());
   (void)commands_on(*wire);
   ASSERT_TRUE(hostile.write(from("flood", 0, command(1, COMMAND_STOP))));  // matched first
-  ASSERT_EQ(states(hostile.follow("flood", 0)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  ASSERT_EQ(Peer::states(hostile.follow("flood", 0)),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   ASSERT_TRUE(eventually([&] { return last32.received() > 0; }, 15s));
   // Stop's bucket is separate: the flood of moves starts with a full one of its own.
   const auto rejected_before = gateway.bridge().counters().commands_rejected;

@@ -91,10 +91,16 @@ class RecordingFiles : public ::testing::Test {
     return {status, out.str(), err.str()};
   }
 
+  // A hundred times as fast as recorded: these files span 11 ms.
+  static replay::ReplayOptions fast() {
+    replay::ReplayOptions options;
+    options.rate = 100;
+    return options;
+  }
+
   Result<replay::ReplayReport> replay_file(const std::string& path,
-                                           replay::ReplayOptions options = {}) {
+                                           replay::ReplayOptions options = fast()) {
     options.file = path;
-    if (options.rate == 1.0) options.rate = 100;
     options.wait_for_readers = std::chrono::milliseconds(0);
     options.domain = kDomain;
     std::atomic<bool> stop{false};
@@ -207,7 +213,7 @@ TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
 TEST_F(RecordingFiles, StartAndEndPickAWindowOfTheRecording) {
   // 12 messages 1 ms apart: 5 ms to 8 ms in are the 6th to the 9th.
   const auto path = save("window.mcap", make_file({}));
-  replay::ReplayOptions options;
+  auto options = fast();
   options.start = std::chrono::milliseconds(5);
   options.end = std::chrono::milliseconds(8);
   const auto replayed = replay_file(path, options);
@@ -250,7 +256,7 @@ TEST_F(RecordingFiles, LoopStartsAgainUntilStopped) {
 
 TEST_F(RecordingFiles, TopicGlobsChooseWhatIsReplayed) {
   const auto path = save("topics.mcap", make_file({}));
-  replay::ReplayOptions options;
+  auto options = fast();
   options.topics = {"teejet/valve/voltage"};
   const auto none = replay_file(path, options);
   ASSERT_FALSE(none.ok());
@@ -277,7 +283,7 @@ TEST_F(RecordingFiles, CommandsAreReplayedOnlyWhenAsked) {
   const auto refused = replay_file(path);
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.error().reason, path + ": no channel to replay");
-  replay::ReplayOptions options;
+  auto options = fast();
   options.with_commands = true;
   const auto replayed = replay_file(path, options);
   ASSERT_TRUE(replayed.ok()) << replayed.error().reason;

@@ -9,10 +9,7 @@
 // "ready" goes to stderr once every reader exists. uint64 values are decimal strings, as the
 // npm reader prints them; floats are the float32 values widened to double.
 
-#include <pthread.h>
-
 #include <atomic>
-#include <csignal>
 #include <cstring>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
@@ -20,10 +17,10 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <thread>
 
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
+#include "teejet/stop_signals.hpp"
 
 namespace {
 
@@ -215,16 +212,7 @@ std::atomic<bool> stopping{false};
 int main(int argc, char** argv) {
   int domain = 0;
   if (argc == 3 && std::strcmp(argv[1], "--domain") == 0) domain = std::atoi(argv[2]);
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  std::thread([signals] {
-    int number = 0;
-    sigwait(&signals, &number);
-    stopping = true;
-  }).detach();
+  teejet::command_line::stop_on_sigint_or_sigterm(stopping);
 
   auto participant = teejet::dds::Participant::create({.domain = domain, .name = "sample-logger"});
   if (!participant) {

@@ -12,6 +12,7 @@
 
 #include "support/scratch_dir.hpp"
 #include "support/subprocess.hpp"
+#include "valve_decode_run.hpp"
 
 namespace {
 
@@ -20,45 +21,16 @@ using namespace std::chrono_literals;
 using teejet::testing::Finished;
 using teejet::testing::ScratchDir;
 using teejet::testing::Subprocess;
+using teejet::testing::valve_decode::expect_same_lines;
+using teejet::testing::valve_decode::lines_of;
+using teejet::testing::valve_decode::read_file;
+using teejet::testing::valve_decode::run_valve_decode;
 
 constexpr const char* kValveDecode = VALVE_DECODE_PATH;
 constexpr const char* kSampleLog = SAMPLE_LOG_PATH;
 constexpr const char* kSampleExpected = SAMPLE_EXPECTED_PATH;
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 bool is_json(const std::string& text) { return nlohmann::json::accept(text); }
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
-// valve-decode with `arguments`, reading `input` on standard input.
-Finished run_valve_decode(std::vector<std::string> arguments, const std::string& input = "") {
-  arguments.insert(arguments.begin(), kValveDecode);
-  Subprocess valve_decode(arguments, Subprocess::Input::kPipe);
-  valve_decode.write_input(input);
-  valve_decode.close_input();
-  auto finished = valve_decode.wait(30s);
-  EXPECT_FALSE(finished.timed_out) << "valve-decode did not exit";
-  return finished;
-}
-
-// Compares line by line so that a failure names the line, not a wall of text.
-void expect_same_lines(const std::string& actual, const std::string& expected) {
-  const auto actual_lines = lines_of(actual);
-  const auto expected_lines = lines_of(expected);
-  for (std::size_t i = 0; i < std::min(actual_lines.size(), expected_lines.size()); ++i) {
-    EXPECT_EQ(actual_lines[i], expected_lines[i]) << "output line " << i + 1;
-  }
-  EXPECT_EQ(actual_lines.size(), expected_lines.size());
-}
 
 TEST(ValveDecodeEndToEnd, SampleTraceMatchesTheHandWrittenGolden) {
   const auto run = run_valve_decode({kSampleLog});

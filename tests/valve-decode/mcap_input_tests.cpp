@@ -19,6 +19,7 @@
 #include "support/subprocess.hpp"
 #include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/mcap/writer.hpp"
+#include "valve_decode_run.hpp"
 
 namespace {
 
@@ -28,48 +29,20 @@ using namespace std::chrono_literals;
 using teejet::testing::Finished;
 using teejet::testing::ScratchDir;
 using teejet::testing::Subprocess;
+using teejet::testing::valve_decode::expect_same_lines;
+using teejet::testing::valve_decode::lines_of;
+using teejet::testing::valve_decode::read_file;
+using teejet::testing::valve_decode::run_valve_decode;
 using Bytes = std::vector<std::uint8_t>;
 
-constexpr const char* kValveDecode = VALVE_DECODE_PATH;
 constexpr const char* kValveIdl = VALVE_IDL_PATH;
 constexpr const char* kNoFrameChannel =
     ": no teejet/can/frame channel (record with teejet-gateway --record-frames)\n";
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 void write_bytes(const fs::path& path, const Bytes& bytes) {
   std::ofstream out(path, std::ios::binary);
   out.write(reinterpret_cast<const char*>(bytes.data()),
             static_cast<std::streamsize>(bytes.size()));
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
-Finished run_valve_decode(std::vector<std::string> arguments, const std::string& input = "") {
-  arguments.insert(arguments.begin(), kValveDecode);
-  Subprocess valve_decode(arguments, Subprocess::Input::kPipe);
-  valve_decode.write_input(input);
-  valve_decode.close_input();
-  auto finished = valve_decode.wait(30s);
-  EXPECT_FALSE(finished.timed_out) << "valve-decode did not exit";
-  return finished;
-}
-
-void expect_same_lines(const std::string& actual, const std::string& expected) {
-  const auto actual_lines = lines_of(actual);
-  const auto expected_lines = lines_of(expected);
-  for (std::size_t i = 0; i < std::min(actual_lines.size(), expected_lines.size()); ++i) {
-    EXPECT_EQ(actual_lines[i], expected_lines[i]) << "output line " << i + 1;
-  }
-  EXPECT_EQ(actual_lines.size(), expected_lines.size()) << actual;
 }
 
 // The sheet's bytes of the first case called `name` (tests/codec/sheet_cases.hpp).
@@ -116,7 +89,7 @@ class Recording {
   // file.
   explicit Recording(const std::string& compression, std::size_t chunk_size = 1 << 20,
                      bool with_frame_channel = true,
-                     const std::string& idl = read_text(kValveIdl)) {
+                     const std::string& idl = read_file(kValveIdl)) {
     auto sink = std::make_unique<mcap::MemorySink>();
     memory_ = sink.get();
     auto writer = mcap::Writer::create(std::move(sink),
@@ -160,7 +133,7 @@ class Recording {
 };
 
 Bytes record(const std::vector<teejet::BusFrame>& frames, const std::string& compression = "zstd",
-             std::size_t chunk_size = 1 << 20, const std::string& idl = read_text(kValveIdl)) {
+             std::size_t chunk_size = 1 << 20, const std::string& idl = read_file(kValveIdl)) {
   Recording recording(compression, chunk_size, true, idl);
   for (const auto& sample : frames) recording.frame(sample);
   return recording.finish();

@@ -2,7 +2,6 @@
 // MCAP file that Foxglove, Lichtblick and PlotJuggler open; --info says what a recording holds.
 
 #include <fmt/format.h>
-#include <pthread.h>
 #include <sys/ioctl.h>
 #include <unistd.h>
 
@@ -11,12 +10,12 @@
 #include <atomic>
 #include <csignal>
 #include <iostream>
-#include <thread>
 
 #include "info.hpp"
 #include "recorder.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/stop_signals.hpp"
 
 namespace {
 
@@ -128,6 +127,12 @@ void print_summary(const teejet::record::Progress& progress) {
         "  {} disposal(s) of instances never seen alive could not be recorded\n",
         progress.unknown_disposals);
   }
+  if (progress.frames_without_candump_line > 0) {
+    std::cerr << fmt::format(
+        "  {} frame(s) have no candump -L form (more than 8 bytes, a bad interface name): in "
+        "the MCAP file only\n",
+        progress.frames_without_candump_line);
+  }
 }
 
 std::atomic<bool> stop_requested{false};
@@ -184,9 +189,8 @@ int main(int argc, char** argv) {
                  "Run teejet-record --help for more information.\n";
     return kExitUsage;
   }
-  for (auto [text, target] : {std::pair{&max_size_text, &options.max_size}}) {
-    if (text->empty()) continue;
-    if (const auto error = parse_size(*text, *target); !error.empty()) {
+  if (!max_size_text.empty()) {
+    if (const auto error = parse_size(max_size_text, options.max_size); !error.empty()) {
       std::cerr << "teejet-record: --max-size " << error << '\n';
       return kExitUsage;
     }
@@ -215,18 +219,7 @@ int main(int argc, char** argv) {
   options.compression = compression == "none" ? "" : compression;
   if (duration_seconds > 0) options.duration = teejet::seconds(duration_seconds);
 
-  // Signals are taken by a thread of ours; every thread started later (Fast DDS's) inherits
-  // the mask, so none of them is interrupted in the middle of a write.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  std::thread([signals] {
-    int number = 0;
-    sigwait(&signals, &number);
-    stop_requested = true;
-  }).detach();
+  teejet::command_line::stop_on_sigint_or_sigterm(stop_requested);
 
   const bool show_progress = !quiet && (progress_flag || ::isatty(STDERR_FILENO) == 1);
   ProgressLine line;

@@ -9,10 +9,11 @@
 #include <fstream>
 #include <memory>
 
+#include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
 #include "teejet/mcap/writer.hpp"
 #include "teejet/recording/catalog.hpp"
-#include "teejet/recording/frames.hpp"
 
 namespace teejet::record {
 namespace {
@@ -53,9 +54,10 @@ using LastSamples = std::map<std::pair<std::size_t, recording::InstanceHandle>, 
 // One MCAP file of the recording with a channel per subscribed topic.
 class RecordingFile {
  public:
+  // Channels (and their schemas) are added with their first message: a topic nobody publishes
+  // costs nothing, and each schema carries the whole IDL text.
   static Result<std::unique_ptr<RecordingFile>> open(const std::string& path,
-                                                     const RecorderOptions& options,
-                                                     const std::vector<Subscription>& topics) {
+                                                     const RecorderOptions& options) {
     auto sink = mcap::open_file_sink(path);
     if (!sink) return sink.error();
     auto writer =
@@ -63,9 +65,6 @@ class RecordingFile {
                                                 .chunk_size = options.chunk_size,
                                                 .library = "teejet-record " TEEJET_VERSION});
     if (!writer) return writer.error();
-    // Channels (and their schemas) are added with their first message: a topic nobody
-    // publishes costs nothing, and each schema carries the whole IDL text.
-    (void)topics;
     return std::unique_ptr<RecordingFile>(new RecordingFile(path, std::move(*writer)));
   }
 
@@ -125,14 +124,13 @@ class CandumpFile {
     }
     return file;
   }
-  Status write(std::span<const std::uint8_t> payload) {
-    auto line = recording::candump_line(payload);
-    if (!line) {
-      ++malformed_;
-      return {};
-    }
-    out_ << *line << '\n';
-    return {};
+  // False for a sample that has no candump form (more than 8 bytes, a bad interface name).
+  bool write(std::span<const std::uint8_t> payload) {
+    const auto sample = bus_frame::deserialize(payload);
+    if (!sample) return false;
+    const auto line = bus_frame::to_candump_line(*sample);
+    if (line) out_ << *line << '\n';
+    return line.ok();
   }
   Status flush() {
     out_.flush();
@@ -144,7 +142,6 @@ class CandumpFile {
   explicit CandumpFile(const std::string& path) : path_(path), out_(path) {}
   std::string path_;
   std::ofstream out_;
-  std::uint64_t malformed_ = 0;
 };
 
 class Recording {
@@ -182,8 +179,9 @@ class Recording {
         !written) {
       return written;
     }
-    if (candump_ && !sample.disposed && type.topic == recording::kFrameTopic) {
-      if (auto written = candump_->write(sample.payload); !written) return written;
+    if (candump_ && !sample.disposed && type.topic == dds::topics::kBusFrame &&
+        !candump_->write(sample.payload)) {
+      ++progress_.frames_without_candump_line;
     }
     auto& tally =
         progress_.topics[sample.disposed ? type.topic + std::string(recording::kDisposedSuffix)
@@ -243,7 +241,7 @@ class Recording {
   Status open_next() {
     const std::string path =
         options_.max_size == 0 ? options_.output : split_file_name(options_.output, file_index_++);
-    auto file = RecordingFile::open(path, options_, topics_);
+    auto file = RecordingFile::open(path, options_);
     if (!file) return file.error();
     file_ = std::move(*file);
     progress_.files.push_back(path);

@@ -41,8 +41,9 @@ struct Progress {
   std::uint64_t messages = 0;
   std::uint64_t file_bytes = 0;  // all files so far
   std::vector<std::string> files;
-  std::map<std::string, TopicTally> topics;  // by channel topic (incl. "/disposed" ones)
-  std::uint64_t unknown_disposals = 0;       // of instances never seen alive: not recordable
+  std::map<std::string, TopicTally> topics;       // by channel topic (incl. "/disposed" ones)
+  std::uint64_t unknown_disposals = 0;            // of instances never seen alive: not recordable
+  std::uint64_t frames_without_candump_line = 0;  // in the MCAP file, not in --candump
 };
 
 // The topics `globs` select, in catalog order; an Error names a glob that selects none.

@@ -2,17 +2,15 @@
 // timing, so that an ECU or a test bench can be developed against a recorded run without valves.
 
 #include <fmt/format.h>
-#include <pthread.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
-#include <csignal>
 #include <iostream>
-#include <thread>
 
 #include "replayer.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/stop_signals.hpp"
 
 namespace {
 
@@ -82,16 +80,7 @@ int main(int argc, char** argv) {
   if (end_s >= 0) options.end = teejet::seconds(end_s);
   options.wait_for_readers = teejet::seconds(wait_s);
 
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  std::thread([signals] {
-    int number = 0;
-    sigwait(&signals, &number);
-    stop_requested = true;
-  }).detach();
+  teejet::command_line::stop_on_sigint_or_sigterm(stop_requested);
 
   auto replayed = teejet::replay::replay(options, stop_requested);
   if (!replayed) {
