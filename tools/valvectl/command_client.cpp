@@ -96,7 +96,13 @@ Result<bool> CommandClient::connect(std::size_t gateways, std::size_t command_re
     auto topic = participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand);
     if (!topic) return topic.error();
     auto writer = participant_.writer(*topic, dds::topics::command_writer_qos());
-    if (!writer) return writer.error();
+    // The QoS is fixed, so a refusal here is DDS-Security: an observer's permissions say no.
+    if (!writer) {
+      return Error{ErrorCode::kDds, std::string("this participant may not write ") +
+                                        dds::topics::kCommand +
+                                        " (its DDS-Security permissions do not grant it); no "
+                                        "command was sent"};
+    }
     command_writer_ = *writer;
   }
   // Commands are VOLATILE: one written before the gateway's reader matched would be lost.

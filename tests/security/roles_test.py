@@ -1,0 +1,317 @@
+#!/usr/bin/env python3
+"""DDS-Security roles, end to end: a site made by tools/pki, teejet-gateway with simulated valves,
+and valvectl as each kind of participant a user meets (docs/security.md).
+
+    --hosts local     every program in this process's network namespace (run it under
+                      tests/netns/isolated); the base profile is --base (loopback)
+    --hosts bridged|routed
+                      gateway on "vehicle", valvectl on "bench" (tests/network/netlab.py; run it
+                      under tests/network/lab-run); base profiles are UDP unicast with initial
+                      peers, written here, since multicast does not cross the routed lab
+
+Cases (what a user notices):
+  commander  lists the 4 valves of --can sim:4, moves one to 90 degrees and sees it COMPLETED
+  observer   lists them too, but its move fails at once naming the command topic, and the valve
+             stays where it was
+  refused    no security at all, a certificate of another CA with the same names, a revoked
+             certificate (still holding the permissions signed before the revocation): each finds
+             no gateway; an expired certificate and a grant whose subject is written O-first
+             cannot even start a participant
+The refused cases run in parallel with short deadlines; the whole run takes about 10 s locally.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
+# How long a refused participant looks for the gateway. A granted one finds it in about 1.2 s
+# locally (authentication included) and 2 s across the routed lab; 4 s leaves room for a busy CI.
+REFUSED_LOOKS_FOR = 4
+SKIP = 77
+
+
+class LocalHosts:
+    """Every "host" is this network namespace (tests/netns/isolated made it private)."""
+
+    def __init__(self):
+        self.processes = []
+
+    def address(self, _host):
+        return "127.0.0.1"
+
+    def spawn(self, _host, argv, env=None, log=None):
+        with open(log, "w") as output:
+            process = subprocess.Popen(argv, env=env, stdin=subprocess.DEVNULL, stdout=output,
+                                       stderr=subprocess.STDOUT)
+        self.processes.append(process)
+        return process
+
+    def run(self, _host, argv, timeout=30, env=None):
+        return subprocess.run(argv, env=env, stdin=subprocess.DEVNULL, capture_output=True,
+                              text=True, timeout=timeout)
+
+    def close(self):
+        for process in self.processes:
+            if process.poll() is None:
+                process.terminate()
+                try:
+                    process.wait(5)
+                except subprocess.TimeoutExpired:
+                    process.kill()
+                    process.wait()
+
+
+# A UDP-only base profile for one lab host: its own address, unicast discovery to its peers (the
+# routed lab carries no multicast). The 3 s lease is the loopback profile's (the gateway's
+# fail-safe relies on it).
+UNICAST_BASE = """<?xml version="1.0" encoding="UTF-8" ?>
+<dds xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <profiles>
+    <transport_descriptors>
+      <transport_descriptor>
+        <transport_id>teejet_lab_udp</transport_id>
+        <type>UDPv4</type>
+        <interfaceWhiteList><address>{own}</address></interfaceWhiteList>
+      </transport_descriptor>
+    </transport_descriptors>
+    <participant profile_name="teejet_lab_unicast" is_default_profile="true">
+      <rtps>
+        <useBuiltinTransports>false</useBuiltinTransports>
+        <userTransports><transport_id>teejet_lab_udp</transport_id></userTransports>
+        <builtin>
+          <discovery_config>
+            <leaseDuration><sec>3</sec></leaseDuration>
+            <leaseAnnouncement><sec>1</sec></leaseAnnouncement>
+          </discovery_config>
+          <metatrafficUnicastLocatorList>
+            <locator><udpv4><address>{own}</address></udpv4></locator>
+          </metatrafficUnicastLocatorList>
+          <initialPeersList>
+{peers}
+          </initialPeersList>
+        </builtin>
+        <defaultUnicastLocatorList>
+          <locator><udpv4><address>{own}</address></udpv4></locator>
+        </defaultUnicastLocatorList>
+      </rtps>
+    </participant>
+  </profiles>
+</dds>
+"""
+
+
+class Suite:
+    def __init__(self, args, hosts, work):
+        self.args = args
+        self.hosts = hosts
+        self.work = work
+        self.site = os.path.join(work, "site")
+        self.failures = []
+        self.gateway_log = os.path.join(work, "gateway.log")
+
+    # ---- helpers ---------------------------------------------------------------------------
+
+    def pki(self, *argv):
+        result = subprocess.run([self.args.pki, *argv], capture_output=True, text=True)
+        if result.returncode != 0:
+            raise RuntimeError(f"tools/pki {' '.join(argv)} failed: {result.stderr.strip()}")
+        return result.stdout
+
+    def base_for(self, host):
+        if self.args.hosts == "local":
+            return self.args.base
+        path = os.path.join(self.work, f"base-{host}.xml")
+        if not os.path.exists(path):
+            peers = [self.hosts.address(h) for h in ("vehicle", "bench") if h != host]
+            locators = "\n".join(f"            <locator><udpv4><address>{p}</address></udpv4>"
+                                 "</locator>" for p in peers)
+            with open(path, "w") as out:
+                out.write(UNICAST_BASE.format(own=self.hosts.address(host), peers=locators))
+        return path
+
+    def env_for(self, profile):
+        # The profile is also the process's default file: loaded once, its transports are not
+        # declared twice (Fast DDS refuses a second file that repeats a transport id).
+        env = dict(os.environ)
+        env["FASTRTPS_DEFAULT_PROFILES_FILE"] = profile
+        env["FASTDDS_DEFAULT_PROFILES_FILE"] = profile
+        return env
+
+    def valvectl_argv(self, profile, *argv, timeout=None):
+        command = [self.args.valvectl, "--profile", profile]
+        if timeout is not None:
+            command += ["--timeout", str(timeout)]
+        return command + list(argv)
+
+    def valvectl(self, profile, *argv, timeout=None, host="bench"):
+        return self.hosts.run(host, self.valvectl_argv(profile, *argv, timeout=timeout),
+                              timeout=60, env=self.env_for(profile))
+
+    def check(self, name, condition, detail):
+        print(f"{'ok  ' if condition else 'FAIL'} {name}" + ("" if condition else f": {detail}"),
+              flush=True)
+        if not condition:
+            self.failures.append(name)
+
+    # ---- the site ----------------------------------------------------------------------------
+
+    def make_site(self):
+        self.pki("init", self.site, "--site", "farm", "--days", "30")
+        for role, name in [("gateway", "gw"), ("commander", "bench"), ("observer", "watcher"),
+                           ("commander", "leaver"), ("commander", "misfiled")]:
+            self.pki("issue", self.site, role, name, "--days", "2")
+        self.pki("issue", self.site, "commander", "late", "--expired")
+        # What the revoked participant keeps: its profile and the permissions and CRL from
+        # before the revocation.
+        stale = os.path.join(self.work, "stale")
+        os.makedirs(stale)
+        for name in ("permissions.p7s", "crl.pem"):
+            shutil.copy(os.path.join(self.site, name), stale)
+        leaver = os.path.join(self.work, "leaver.xml")
+        self.pki("profile", self.site, "leaver", "--base", self.base_for("bench"), "--out", leaver)
+        with open(leaver) as source:
+            text = source.read()
+        with open(leaver, "w") as out:
+            out.write(text.replace(f"file://{self.site}/permissions.p7s",
+                                   f"file://{stale}/permissions.p7s")
+                      .replace(f"file://{self.site}/crl.pem", f"file://{stale}/crl.pem"))
+        self.pki("revoke", self.site, "leaver")
+        # The subject written the way round X.509 stores it (O first), not as Fast DDS prints it.
+        with open(os.path.join(self.site, "participants", "misfiled", "subject"), "w") as out:
+            out.write("O=farm,OU=commander,CN=misfiled\n")
+        self.pki("sign", self.site)
+        # Another CA made the same way, with the same site and participant names.
+        forged = os.path.join(self.work, "forged")
+        self.pki("init", forged, "--site", "farm")
+        self.pki("issue", forged, "commander", "bench")
+
+        self.profiles = {"leaver": leaver}
+        for name, host in [("gw", "vehicle"), ("bench", "bench"), ("watcher", "bench"),
+                           ("misfiled", "bench"), ("late", "bench")]:
+            self.pki("profile", self.site, name, "--base", self.base_for(host))
+            self.profiles[name] = os.path.join(self.site, f"{name}.xml")
+        self.pki("profile", forged, "bench", "--base", self.base_for("bench"))
+        self.profiles["forged"] = os.path.join(forged, "bench.xml")
+        self.profiles["plain"] = self.base_for("bench")
+
+    # ---- the cases ---------------------------------------------------------------------------
+
+    def positions(self, listing):
+        return {row["serial"]: row.get("position") for row in json.loads(listing)}
+
+    def run(self):
+        self.make_site()
+        started = time.monotonic()
+        gateway = self.hosts.spawn(
+            "vehicle", [self.args.gateway, "--can", "sim:4", "--profile", self.profiles["gw"]],
+            env=self.env_for(self.profiles["gw"]), log=self.gateway_log)
+
+        listing = self.valvectl(self.profiles["bench"], "--json", "list", "--wait-for", "4",
+                                timeout=20)
+        found = sorted(row["serial"] for row in json.loads(listing.stdout or "[]"))
+        self.check("commander lists the 4 valves", listing.returncode == 0 and found == SERIALS,
+                   f"exit {listing.returncode}, {found}, stderr: {listing.stderr.strip()}")
+        print(f"     (gateway start to commander's list: {time.monotonic() - started:.2f} s)")
+
+        # The refused participants look for the gateway meanwhile, each with its own deadline.
+        refused = {}
+        for case in ("plain", "forged", "leaver", "late", "misfiled"):
+            log = os.path.join(self.work, f"{case}.log")
+            refused[case] = (log, self.hosts.spawn(
+                "bench", self.valvectl_argv(self.profiles[case], "list", "--wait-for", "4",
+                                            timeout=REFUSED_LOOKS_FOR),
+                env=self.env_for(self.profiles[case]), log=log))
+
+        move = self.valvectl(self.profiles["bench"], "move", SERIALS[0], "--to", "90", "--wait")
+        self.check("commander moves TJV000001 to 90 degrees",
+                   move.returncode == 0 and "COMPLETED" in move.stdout,
+                   f"exit {move.returncode}, stdout: {move.stdout.strip()[-200:]}, "
+                   f"stderr: {move.stderr.strip()[-300:]}")
+
+        seen = self.valvectl(self.profiles["watcher"], "--json", "list", "--wait-for", "4",
+                             timeout=20)
+        positions = self.positions(seen.stdout) if seen.returncode == 0 else {}
+        self.check("observer lists the 4 valves with positions",
+                   sorted(positions) == SERIALS and positions[SERIALS[0]] == 90.0,
+                   f"exit {seen.returncode}, {positions}, stderr: {seen.stderr.strip()}")
+
+        refused_move = self.valvectl(self.profiles["watcher"], "move", SERIALS[1], "--to", "45")
+        self.check("observer's move is refused at once, naming the command topic",
+                   refused_move.returncode == 1
+                   and "may not write teejet/valve/command" in refused_move.stderr,
+                   f"exit {refused_move.returncode}, stderr: {refused_move.stderr.strip()}")
+
+        after = self.valvectl(self.profiles["bench"], "--json", "list", "--wait-for", "4")
+        positions = self.positions(after.stdout) if after.returncode == 0 else {}
+        self.check("the observer's valve did not move (TJV000002 at 0, TJV000001 at 90)",
+                   positions.get(SERIALS[1]) == 0.0 and positions.get(SERIALS[0]) == 90.0,
+                   f"exit {after.returncode}, {positions}")
+
+        expected = {
+            "plain": (2, "no gateway found", "no security (plain profile) finds no gateway"),
+            "forged": (2, "no gateway found", "a certificate of another CA finds no gateway"),
+            "leaver": (2, "no gateway found",
+                       "a revoked certificate with its old permissions finds no gateway"),
+            "late": (1, "cannot create a DDS participant",
+                     "an expired certificate cannot start a participant"),
+            "misfiled": (1, "cannot create a DDS participant",
+                         "a grant whose subject is written O-first cannot start a participant"),
+        }
+        for case, (log, process) in refused.items():
+            try:
+                code = process.wait(REFUSED_LOOKS_FOR + 20)
+            except subprocess.TimeoutExpired:
+                code = None
+            with open(log) as text:
+                output = text.read()
+            want_code, want_text, name = expected[case]
+            self.check(name, code == want_code and want_text in output,
+                       f"exit {code}, output: {output.strip()[-400:]}")
+
+        self.check("the gateway is still running", gateway.poll() is None,
+                   f"exit {gateway.returncode}")
+        print(f"     (all cases: {time.monotonic() - started:.2f} s)")
+        if self.failures:
+            with open(self.gateway_log) as text:
+                print("---- gateway log\n" + text.read())
+        return 1 if self.failures else 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--gateway", required=True)
+    parser.add_argument("--valvectl", required=True)
+    parser.add_argument("--pki", required=True)
+    parser.add_argument("--base", help="base profile for --hosts local (the loopback profile)")
+    parser.add_argument("--hosts", choices=["local", "bridged", "routed"], default="local")
+    parser.add_argument("--netem", help="netem for the routed lab, e.g. 'delay 20ms'")
+    args = parser.parse_args()
+    if args.hosts == "local" and not args.base:
+        parser.error("--hosts local needs --base")
+
+    with tempfile.TemporaryDirectory(prefix="teejet-security-") as work:
+        if args.hosts == "local":
+            hosts = LocalHosts()
+            try:
+                return Suite(args, hosts, work).run()
+            finally:
+                hosts.close()
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                        "network"))
+        from netlab import Lab, LabUnavailable  # noqa: E402 (found only under tests/network)
+        try:
+            with Lab(args.hosts, netem=args.netem) as lab:
+                return Suite(args, lab, work).run()
+        except LabUnavailable as why:
+            print(f"SKIP: {why}")
+            return SKIP
+
+
+if __name__ == "__main__":
+    sys.exit(main())
