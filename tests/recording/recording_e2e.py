@@ -19,6 +19,7 @@ Every wait has a deadline; every failure says what differed.
 import argparse
 import json
 import os
+import re
 import select
 import signal
 import subprocess
@@ -194,15 +195,39 @@ def split_at(samples, settle_ns, time_key):
     return samples[:cut], samples[cut:]
 
 
-def compare_topics(logged, recorded, what, settle_ns=0, prefix=False):
+# Telemetry writers keep only the last sample of an instance (KEEP_LAST 1): a reader that
+# loses a datagram under load and asks again after the next sample was written gets a gap. At
+# 2,600 samples/s with the compilers of a CI run on both cores, the recorder or the subscriber
+# missed 1 of ~16,000 (stop 20 CI). The split test allows that many, and no more.
+MAX_STATE_GAPS_PER_MILLION = 500
+
+
+def merge_state_gaps(a, b, what, key):
+    """Per instance of a KEEP_LAST 1 topic: the samples both sides got (same source timestamp),
+    which must agree in order and values, and how many only one side got."""
+    stamps_a = {sample["source_ns"] for sample in a}
+    stamps_b = {message["publish_time"] for message in b}
+    common = stamps_a & stamps_b
+    both_a = [sample for sample in a if sample["source_ns"] in common]
+    both_b = [message for message in b if message["publish_time"] in common]
+    if len(common) != len(stamps_a | stamps_b):
+        check(key[0] != "teejet/valve/command",
+              f"{what}: {key}: a command only one side got (commands are KEEP_ALL)")
+    return both_a, both_b, len(stamps_a ^ stamps_b)
+
+
+def compare_topics(logged, recorded, what, settle_ns=0, prefix=False, allow_state_gaps=False):
     """Per instance: the same samples in the same order, with the same values and source
     timestamps. Before `settle_ns` (when the test starts commanding, long after every reader
     matched the gateway) a reader that matched the gateway's writer a moment after the other
     may have missed an instance's first samples (the writer keeps only the last one for late
     joiners): there the shorter list must be the end of the longer. With `prefix`, the file
-    may end early (a killed recorder). Returns per-topic counts and how many early samples one
-    side missed."""
+    may end early (a killed recorder). With `allow_state_gaps`, a telemetry sample only one
+    side got is counted, not failed (see MAX_STATE_GAPS_PER_MILLION). Returns per-topic counts
+    and how many early samples one side missed."""
     missed = 0
+    gaps = 0
+    compared = 0
     counts = {}
     if not prefix:
         check(set(logged) == set(recorded),
@@ -220,6 +245,10 @@ def compare_topics(logged, recorded, what, settle_ns=0, prefix=False):
         if prefix:
             a = a[:len(b)]
         counts[key[0]] = counts.get(key[0], 0) + len(b) + len(early_b)
+        if allow_state_gaps and len(a) != len(b):
+            a, b, only_one_side = merge_state_gaps(a, b, what, key)
+            gaps += only_one_side
+        compared += len(a)
         check(len(a) == len(b), f"{what}: {key}: subscriber got {len(a)}, file holds {len(b)}")
         for i, (sample, message) in enumerate(zip(a, b)):
             check(normalise(message["data"]) == normalise(sample["data"]),
@@ -227,6 +256,11 @@ def compare_topics(logged, recorded, what, settle_ns=0, prefix=False):
             check(message["publish_time"] == sample["source_ns"],
                   f"{what}: {key} #{i + 1}: publish time {message['publish_time']} != source "
                   f"timestamp {sample['source_ns']}")
+    if allow_state_gaps:
+        print(f"{what}: {gaps} telemetry sample(s) of {compared} only one side got")
+        check(gaps * 1_000_000 <= compared * MAX_STATE_GAPS_PER_MILLION,
+              f"{what}: {gaps} of {compared} samples only one side got: more than "
+              f"{MAX_STATE_GAPS_PER_MILLION} per million")
     return counts, missed
 
 
@@ -401,8 +435,15 @@ def case_split(run):
             check(not events, f"split: {name} starts with events, not state: {events}")
             messages = messages[len(carried):]
         live += messages
+    # What the recorder took from DDS is all in the files (the carried state aside): splitting
+    # lost nothing.
+    with open(run.path("recorder.err")) as err:
+        summary = re.search(r"teejet-record: (\d+) messages in", err.read())
+    check(summary and int(summary.group(1)) == len(live),
+          f"split: the recorder reported {summary and summary.group(1)} messages, the files hold "
+          f"{len(live)} besides the carried state")
     counts, missed = compare_topics(logger_by_topic(logged), file_by_topic(live), "split",
-                                    settle_ns)
+                                    settle_ns, allow_state_gaps=True)
     print(f"split: {len(files)} files ({', '.join(files)}), each complete and standing alone; "
           f"together {len(live)} messages equal to the subscriber's")
 
