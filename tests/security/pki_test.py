@@ -155,7 +155,7 @@ class Pki(unittest.TestCase):
                      "--days", "-3")
         self.init()
         self.refused("exists and is not empty", "init", self.site, "--site", "farm")
-        self.refused("unknown role 'admin' (roles: gateway commander observer)", "issue",
+        self.refused("unknown role 'admin' (roles: commander gateway observer recorder)", "issue",
                      self.site, "admin", "x")
         self.refused("participant name 'a/b' must be", "issue", self.site, "observer", "a/b")
         self.ok("issue", self.site, "observer", "dash")
