@@ -168,6 +168,13 @@ class Pki(unittest.TestCase):
                      "dash", "--base", "/nonexistent.xml")
         self.refused("has no <participant> profile", "profile", self.site, "dash", "--base",
                      self.path("site.conf"))
+        server = os.path.join(self.work.name, "server.xml")
+        with open(server, "w") as out:
+            out.write("<dds><profiles><participant profile_name='s'><rtps><builtin>"
+                      "<discovery_config><discoveryProtocol>SERVER</discoveryProtocol>"
+                      "</discovery_config></builtin></rtps></participant></profiles></dds>\n")
+        self.refused("uses a Discovery Server; Fast DDS 2.9 cannot combine it with security",
+                     "profile", self.site, "dash", "--base", server)
         self.refused("no participant 'ghost'", "profile", self.site, "ghost", "--base",
                      self.path("site.conf"))
         os.rename(self.path("private", "permissions_ca.key"), self.path("private", "moved.key"))
