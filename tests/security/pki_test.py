@@ -91,6 +91,12 @@ class Pki(unittest.TestCase):
         self.assertNotIn("<publish>", observer)
         self.assertNotIn("teejet/valve/command<", observer)
         self.assertIn("<default>DENY</default>", observer)
+        # Fast DDS reads grant times in local time: a day's margin each side of the certificate.
+        start = openssl("x509", "-in", self.path("participants", "dash", "cert.pem"), "-noout",
+                        "-startdate").stdout.strip().split("=")[1]
+        day_before = subprocess.run(["date", "-u", "-d", f"{start} - 1 day",
+                                     "+%Y-%m-%dT%H:%M:%S"], capture_output=True, text=True)
+        self.assertIn(f"<not_before>{day_before.stdout.strip()}</not_before>", observer)
         gateway = permissions.split('<grant name="gw">')[1].split("</grant>")[0]
         self.assertIn("<subscribe>\n          <topics>\n            <topic>teejet/valve/command<",
                       gateway)

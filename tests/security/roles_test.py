@@ -135,12 +135,16 @@ class Suite:
                 out.write(UNICAST_BASE.format(own=self.hosts.address(host), peers=locators))
         return path
 
-    def env_for(self, profile):
+    def env_for(self, profile, host="bench"):
         # The profile is also the process's default file: loaded once, its transports are not
         # declared twice (Fast DDS refuses a second file that repeats a transport id).
         env = dict(os.environ)
         env["FASTRTPS_DEFAULT_PROFILES_FILE"] = profile
         env["FASTDDS_DEFAULT_PROFILES_FILE"] = profile
+        # Fast DDS reads a grant's validity in local time: the benches run 10 h behind UTC and
+        # the vehicle 14 h ahead (POSIX zones, no tzdata needed), where a grant written for the
+        # hour it was issued would not have started yet or would look older than it is.
+        env["TZ"] = "XST10" if host == "bench" else "YST-14"
         return env
 
     def valvectl_argv(self, profile, *argv, timeout=None):
@@ -210,7 +214,7 @@ class Suite:
         started = time.monotonic()
         gateway = self.hosts.spawn(
             "vehicle", [self.args.gateway, "--can", "sim:4", "--profile", self.profiles["gw"]],
-            env=self.env_for(self.profiles["gw"]), log=self.gateway_log)
+            env=self.env_for(self.profiles["gw"], "vehicle"), log=self.gateway_log)
 
         listing = self.valvectl(self.profiles["bench"], "--json", "list", "--wait-for", "4",
                                 timeout=20)
