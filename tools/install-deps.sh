@@ -60,6 +60,8 @@ PACKAGES=(
   util-linux
   # formatting
   clang-format
+  # DDS-Security material (tools/pki): the openssl command line
+  openssl
   # (Node and npm for tests/mcap-js: see NODE_PACKAGES below)
   # sanitizer builds and fuzz targets (asan, tsan presets): clang, its sanitizer and libFuzzer
   # runtimes, and llvm-symbolizer (package llvm) for file:line in reports
