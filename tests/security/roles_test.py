@@ -14,9 +14,11 @@ Cases (what a user notices):
   observer   lists them too, but its move fails at once naming the command topic, and the valve
              stays where it was
   refused    no security at all, a certificate of another CA with the same names, a revoked
-             certificate (still holding the permissions signed before the revocation): each finds
-             no gateway; an expired certificate and a grant whose subject is written O-first
-             cannot even start a participant
+             certificate (still holding the permissions signed before the revocation), the key
+             and certificate that rotation replaced: each finds no gateway; an expired
+             certificate and a grant whose subject is written O-first cannot even start a
+             participant
+  rotated    the new key and certificate list the valves
 The refused cases run in parallel with short deadlines; the whole run takes about 10 s locally.
 """
 
@@ -168,7 +170,8 @@ class Suite:
     def make_site(self):
         self.pki("init", self.site, "--site", "farm", "--days", "30")
         for role, name in [("gateway", "gw"), ("commander", "bench"), ("observer", "watcher"),
-                           ("commander", "leaver"), ("commander", "misfiled")]:
+                           ("commander", "leaver"), ("commander", "misfiled"),
+                           ("commander", "rotor")]:
             self.pki("issue", self.site, role, name, "--days", "2")
         self.pki("issue", self.site, "commander", "late", "--expired")
         # What the revoked participant keeps: its profile and the permissions and CRL from
@@ -186,6 +189,21 @@ class Suite:
                                    f"file://{stale}/permissions.p7s")
                       .replace(f"file://{self.site}/crl.pem", f"file://{stale}/crl.pem"))
         self.pki("revoke", self.site, "leaver")
+        # Rotation: the key and certificate before `issue --replace` stay with their profile and
+        # the CRL of that time (with the new CRL they would not even start).
+        rotor_old = os.path.join(self.work, "rotor-old")
+        shutil.copytree(os.path.join(self.site, "participants", "rotor"), rotor_old)
+        shutil.copy(os.path.join(self.site, "crl.pem"), rotor_old)
+        rotor_old_profile = os.path.join(self.work, "rotor-old.xml")
+        self.pki("profile", self.site, "rotor", "--base", self.base_for("bench"), "--out",
+                 rotor_old_profile)
+        with open(rotor_old_profile) as source:
+            text = source.read()
+        with open(rotor_old_profile, "w") as out:
+            out.write(text.replace(f"file://{self.site}/participants/rotor/",
+                                   f"file://{rotor_old}/")
+                      .replace(f"file://{self.site}/crl.pem", f"file://{rotor_old}/crl.pem"))
+        self.pki("issue", self.site, "commander", "rotor", "--replace", "--days", "2")
         # The subject written the way round X.509 stores it (O first), not as Fast DDS prints it.
         with open(os.path.join(self.site, "participants", "misfiled", "subject"), "w") as out:
             out.write("O=farm,OU=commander,CN=misfiled\n")
@@ -195,9 +213,9 @@ class Suite:
         self.pki("init", forged, "--site", "farm")
         self.pki("issue", forged, "commander", "bench")
 
-        self.profiles = {"leaver": leaver}
+        self.profiles = {"leaver": leaver, "rotor-old": rotor_old_profile}
         for name, host in [("gw", "vehicle"), ("bench", "bench"), ("watcher", "bench"),
-                           ("misfiled", "bench"), ("late", "bench")]:
+                           ("misfiled", "bench"), ("late", "bench"), ("rotor", "bench")]:
             self.pki("profile", self.site, name, "--base", self.base_for(host))
             self.profiles[name] = os.path.join(self.site, f"{name}.xml")
         self.pki("profile", forged, "bench", "--base", self.base_for("bench"))
@@ -225,7 +243,7 @@ class Suite:
 
         # The refused participants look for the gateway meanwhile, each with its own deadline.
         refused = {}
-        for case in ("plain", "forged", "leaver", "late", "misfiled"):
+        for case in ("plain", "forged", "leaver", "late", "misfiled", "rotor-old"):
             log = os.path.join(self.work, f"{case}.log")
             refused[case] = (log, self.hosts.spawn(
                 "bench", self.valvectl_argv(self.profiles[case], "list", "--wait-for", "4",
@@ -244,6 +262,10 @@ class Suite:
         self.check("observer lists the 4 valves with positions",
                    sorted(positions) == SERIALS and positions[SERIALS[0]] == 90.0,
                    f"exit {seen.returncode}, {positions}, stderr: {seen.stderr.strip()}")
+
+        rotated = self.valvectl(self.profiles["rotor"], "list", "--wait-for", "4")
+        self.check("the rotated key and certificate list the 4 valves", rotated.returncode == 0,
+                   f"exit {rotated.returncode}, stderr: {rotated.stderr.strip()}")
 
         refused_move = self.valvectl(self.profiles["watcher"], "move", SERIALS[1], "--to", "45")
         self.check("observer's move is refused at once, naming the command topic",
@@ -264,6 +286,8 @@ class Suite:
                        "a revoked certificate with its old permissions finds no gateway"),
             "late": (1, "cannot create a DDS participant",
                      "an expired certificate cannot start a participant"),
+            "rotor-old": (2, "no gateway found",
+                          "the key and certificate replaced by rotation find no gateway"),
             "misfiled": (1, "cannot create a DDS participant",
                          "a grant whose subject is written O-first cannot start a participant"),
         }
