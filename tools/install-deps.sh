@@ -4,11 +4,13 @@
 # (tests/mcap-js, pinned in its package-lock.json). Idempotent: when everything is
 # already installed it changes nothing and does not touch the network.
 #
-# Usage: tools/install-deps.sh          install what is missing
-#        tools/install-deps.sh --print  print the package list, one per line
+# Usage: tools/install-deps.sh               install what is missing
+#        tools/install-deps.sh --print       print the package list, one per line
+#        tools/install-deps.sh --build-only  only what compiling the programs needs
+#                                            (no tests, tools, npm); --print combines
 #
 # This is the single list of system dependencies: tools/test, tools/demo and
-# docker/Dockerfile all run this script.
+# docker/Dockerfile (--build-only) all run this script.
 set -euo pipefail
 
 PACKAGES=(
@@ -70,13 +72,36 @@ PACKAGES=(
   llvm
 )
 
+# What configuring the release preset with BUILD_TESTING=OFF and compiling the programs needs
+# (docker/Dockerfile's builder stage): a subset of PACKAGES. libbenchmark-dev because bench/
+# is configured unconditionally; fastddsgen and its JRE generate the DDS types at build time.
+BUILD_PACKAGES=(
+  cmake
+  gcc
+  g++
+  ninja-build
+  pkg-config
+  fastddsgen
+  default-jre-headless
+  libfastrtps-dev
+  libfastcdr-dev
+  libbenchmark-dev
+  libcli11-dev
+  libspdlog-dev
+  libfmt-dev
+  libyaml-cpp-dev
+  nlohmann-json3-dev
+  libzstd-dev
+  liblz4-dev
+  zlib1g-dev
+)
+
 # Node (18 or newer) and npm run the independent MCAP reader of tests/mcap-js. Debian's
 # packages only when the commands are missing: a Node from elsewhere (nodesource bundles npm)
 # conflicts with Debian's npm package and serves as well.
 NODE_PACKAGES=()
 command -v node >/dev/null 2>&1 || NODE_PACKAGES+=(nodejs)
 command -v npm >/dev/null 2>&1 || NODE_PACKAGES+=(npm)
-PACKAGES+=("${NODE_PACKAGES[@]}")
 
 MCAP_JS="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/mcap-js"
 # npm ci runs when the lockfile differs from the one node_modules was installed from, whose
@@ -86,18 +111,29 @@ MCAP_JS_STAMP="$MCAP_JS/node_modules/.teejet-lockfile-sha256"
 log() { printf 'install-deps: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
 
-case "${1:-}" in
-  --print)
-    printf '%s\n' "${PACKAGES[@]}"
-    exit 0
-    ;;
-  -h | --help)
-    sed -n '2,10s/^# \{0,1\}//p' "$0"
-    exit 0
-    ;;
-  "") ;;
-  *) die "unknown argument '$1' (try --help)" ;;
-esac
+print=0 build_only=0
+for arg in "$@"; do
+  case "$arg" in
+    --print) print=1 ;;
+    --build-only) build_only=1 ;;
+    -h | --help)
+      sed -n '2,13s/^# \{0,1\}//p' "$0"
+      exit 0
+      ;;
+    *) die "unknown argument '$arg' (try --help)" ;;
+  esac
+done
+
+if ((build_only)); then
+  PACKAGES=("${BUILD_PACKAGES[@]}")
+else
+  PACKAGES+=("${NODE_PACKAGES[@]}")
+fi
+
+if ((print)); then
+  printf '%s\n' "${PACKAGES[@]}"
+  exit 0
+fi
 
 for tool in dpkg-query apt-get; do
   command -v "$tool" >/dev/null 2>&1 ||
@@ -170,4 +206,4 @@ install_npm_packages() {
 }
 
 install_debian_packages
-install_npm_packages
+((build_only)) || install_npm_packages

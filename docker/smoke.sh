@@ -1,0 +1,209 @@
+#!/usr/bin/env bash
+# Build docker/Dockerfile with Podman and check the image works: a developer's check, run as
+# root on a Debian host (CI does not run it; it downloads packages and takes ~15 min on 2 cores).
+#
+# Usage: docker/smoke.sh   (no arguments; prints a PASS/FAIL summary, exits 1 if a check failed)
+#
+# Steps: installs podman, buildah, debootstrap and runc when missing; makes a Debian bookworm
+# base image with `debootstrap --variant=minbase` from this host's mirror (cached in
+# $TEEJET_SMOKE_CACHE, default /var/cache/teejet-smoke, and as a local image: a second run
+# skips it); builds the Dockerfile on it; reports the image size and the build time; runs the
+# image with --network none (its own loopback only: DDS traffic never leaves the container).
+# Only `podman build` gets the host network, for apt's package downloads; no DDS program runs
+# during the build.
+
+# The single-quoted scripts below are expanded by bash inside the container, not here.
+# shellcheck disable=SC2016
+set -euo pipefail
+
+REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+CACHE="${TEEJET_SMOKE_CACHE:-/var/cache/teejet-smoke}"
+BASE_IMAGE="localhost/teejet-bookworm-minbase:latest"
+IMAGE="localhost/teejet-dds-gateway:smoke"
+# Size the runtime image must stay under (docker/README.md).
+MAX_IMAGE_MB=300
+# This sandbox needs runc and explicit limits: Podman's defaults (nofile 1048576) exceed the
+# hard limits runc may set here, and so does an nproc of 65536 even under a higher hard limit.
+# This shell's own open-file limit, and at most 32768 processes.
+PODMAN=(podman --runtime runc)
+nofile=$(ulimit -Hn) nproc=$(ulimit -Hu)
+[[ "$nproc" == unlimited ]] || ((nproc > 32768)) && nproc=32768
+ULIMITS=(--ulimit "nofile=$nofile:$nofile" --ulimit "nproc=$nproc:$nproc")
+RUN=("${PODMAN[@]}" run --rm --network none "${ULIMITS[@]}")
+
+log() { printf 'smoke: %s\n' "$*" >&2; }
+die() { log "error: $*"; exit 1; }
+
+case "${1:-}" in
+  "") ;;
+  -h | --help) sed -n '2,13s/^# \{0,1\}//p' "$0"; exit 0 ;;
+  *) die "unknown argument '$1' (try --help)" ;;
+esac
+((EUID == 0)) || die "run as root: podman, debootstrap and apt-get need it"
+
+results=()
+failed=0
+pass() { results+=("PASS  $*"); log "PASS: $*"; }
+fail() { results+=("FAIL  $*"); log "FAIL: $*"; failed=1; }
+summary() {
+  printf '\n== docker/smoke.sh summary ==\n'
+  printf '%s\n' "${results[@]}"
+  if ((failed)); then printf 'RESULT: FAIL\n'; else printf 'RESULT: PASS\n'; fi
+}
+trap summary EXIT
+
+# --- tools --------------------------------------------------------------------------------------
+missing=()
+for pkg in podman buildah debootstrap runc; do
+  [[ "$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null || true)" == "install ok installed" ]] ||
+    missing+=("$pkg")
+done
+if ((${#missing[@]} > 0)); then
+  log "installing ${missing[*]}"
+  DEBIAN_FRONTEND=noninteractive apt-get update
+  DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+log "disk space:"
+df -h /var >&2
+avail_kb=$(df --output=avail -k /var | tail -1)
+((avail_kb > 8 * 1024 * 1024)) || die "less than 8 GB free on /var: the build needs ~4 GB"
+
+# Overlay when the kernel allows it, vfs (slow, large, but works everywhere) otherwise.
+if ! "${PODMAN[@]}" info >/dev/null 2>&1; then
+  log "podman does not start with its default storage: using --storage-driver vfs"
+  PODMAN+=(--storage-driver vfs)
+  RUN=("${PODMAN[@]}" run --rm --network none "${ULIMITS[@]}")
+fi
+
+# --- base image ---------------------------------------------------------------------------------
+# The first URIs of this host's debian.sources (e.g. a snapshot or a local mirror).
+mirror() {
+  local sources=/etc/apt/sources.list.d/debian.sources uri=""
+  [[ -f "$sources" ]] && uri=$(awk '/^URIs:/ {print $2; exit}' "$sources")
+  printf '%s\n' "${uri:-http://deb.debian.org/debian}"
+}
+
+tarball="$CACHE/bookworm-minbase.tar"
+if "${PODMAN[@]}" image exists "$BASE_IMAGE"; then
+  log "base image $BASE_IMAGE exists"
+else
+  if [[ ! -s "$tarball" ]]; then
+    mkdir -p "$CACHE"
+    rootfs="$CACHE/rootfs.tmp"
+    rm -rf "$rootfs"
+    log "debootstrap --variant=minbase bookworm from $(mirror)"
+    debootstrap --variant=minbase bookworm "$rootfs" "$(mirror)" >"$CACHE/debootstrap.log" 2>&1 ||
+      die "debootstrap failed: see $CACHE/debootstrap.log"
+    # Slim like debian:bookworm-slim: no downloaded .debs, package lists (the Dockerfile runs
+    # apt-get update itself), manuals or translations, neither now nor in later installs.
+    rm -rf "$rootfs"/var/lib/apt/lists/* "$rootfs"/var/cache/apt/*.bin \
+      "$rootfs"/var/cache/apt/archives/*.deb
+    cat >"$rootfs/etc/dpkg/dpkg.cfg.d/docker-slim" <<'EOF'
+path-exclude /usr/share/doc/*
+path-include /usr/share/doc/*/copyright
+path-exclude /usr/share/man/*
+path-exclude /usr/share/info/*
+path-exclude /usr/share/locale/*
+EOF
+    # Files only: packages' scripts expect the directories (openjdk's postinst links into man1).
+    find "$rootfs"/usr/share/doc -mindepth 2 ! -name copyright ! -type d -delete
+    find "$rootfs"/usr/share/man "$rootfs"/usr/share/info "$rootfs"/usr/share/locale \
+      ! -type d -delete
+    tar -C "$rootfs" --numeric-owner -cf "$tarball.tmp" .
+    mv "$tarball.tmp" "$tarball"
+    rm -rf "$rootfs"
+  fi
+  log "importing $tarball as $BASE_IMAGE"
+  "${PODMAN[@]}" import --change 'CMD ["bash"]' "$tarball" "$BASE_IMAGE" >/dev/null
+fi
+
+# --- build --------------------------------------------------------------------------------------
+log "building $IMAGE (the first build compiles everything: ~10-20 min on 2 cores)"
+start=$SECONDS
+if "${PODMAN[@]}" build --network host "${ULIMITS[@]}" --build-arg "BASE_IMAGE=$BASE_IMAGE" \
+  -f "$REPO_ROOT/docker/Dockerfile" -t "$IMAGE" "$REPO_ROOT"; then
+  pass "podman build (OCI format) in $((SECONDS - start)) s"
+else
+  fail "podman build (OCI format) after $((SECONDS - start)) s"
+  exit 1
+fi
+
+size=$("${PODMAN[@]}" image inspect --format '{{.Size}}' "$IMAGE")
+size_mb=$((size / 1000 / 1000))
+if ((size_mb < MAX_IMAGE_MB)); then
+  pass "image size ${size_mb} MB (< ${MAX_IMAGE_MB} MB)"
+else
+  fail "image size ${size_mb} MB (limit ${MAX_IMAGE_MB} MB)"
+fi
+
+# --- checks, every one with --network none ------------------------------------------------------
+# check NAME EXPECTED_OUTPUT_REGEX COMMAND...: passes when COMMAND exits 0 and prints a match.
+check() {
+  local name=$1 want=$2 out status=0
+  shift 2
+  out=$("$@" 2>&1) || status=$?
+  printf '%s\n' "$out" | sed 's/^/    | /' >&2
+  if ((status == 0)) && grep -Eq -- "$want" <<<"$out"; then
+    pass "$name"
+  else
+    fail "$name (exit $status, wanted output matching '$want')"
+  fi
+}
+
+check "teejet-gateway --version (entrypoint)" '^teejet-gateway [0-9]+\.[0-9]+\.[0-9]+' \
+  "${RUN[@]}" "$IMAGE" --version
+check "teejet-gateway --help" 'Usage:.*teejet-gateway' "${RUN[@]}" "$IMAGE" --help
+check "runs as the non-root user teejet (uid 10001)" '^10001 teejet$' \
+  "${RUN[@]}" --entrypoint bash "$IMAGE" -c 'echo "$(id -u) $(id -un)"'
+check "every program and library resolves (ldd)" '^all resolved$' \
+  "${RUN[@]}" --entrypoint bash "$IMAGE" -c '
+    for f in /opt/teejet/bin/*; do
+      ldd "$f" | grep "not found" && { echo "$f: missing libraries"; exit 1; }
+    done
+    echo "all resolved"'
+for tool in valvectl valve-sim valve-decode teejet-record teejet-replay; do
+  check "$tool --version" "^$tool [0-9]" "${RUN[@]}" --entrypoint "$tool" "$IMAGE" --version
+done
+
+# The gateway on 4 simulated valves, valvectl finding them and moving one to 90 degrees, all in
+# one container: the loopback profile keeps DDS on shared memory and 127.0.0.1.
+check "gateway --can sim:4, valvectl list --wait-for 4, move TJV000002 --to 90 --wait" \
+  'gateway exited 0' \
+  "${RUN[@]}" --entrypoint bash "$IMAGE" -euo pipefail -c '
+    profile=/etc/teejet/fastdds-loopback.xml
+    teejet-gateway --can sim:4 --profile "$profile" --log-level warn &
+    gw=$!
+    valvectl --profile "$profile" --timeout 20 list --wait-for 4
+    valvectl --profile "$profile" move TJV000002 --to 90 --wait
+    valvectl --profile "$profile" list | grep -E "SERIAL|TJV000002"
+    kill -TERM "$gw"
+    status=0
+    wait "$gw" || status=$?
+    echo "gateway exited $status"'
+
+# The discovery server of docker/compose.yaml, and a gateway and valvectl as its clients through
+# ROS_DISCOVERY_SERVER (no profile: Fast DDS then discovers through the server only). Before
+# the server starts, valvectl must not find the gateway: the clients really depend on it.
+check "fast-discovery-server on 11811, gateway and valvectl as clients (ROS_DISCOVERY_SERVER)" \
+  'gateway exited 0' \
+  "${RUN[@]}" --entrypoint bash "$IMAGE" -euo pipefail -c '
+    export ROS_DISCOVERY_SERVER=127.0.0.1:11811
+    teejet-gateway --can sim:2 --log-level warn &
+    gw=$!
+    if valvectl --timeout 3 list --wait-for 2; then
+      echo "valvectl found the gateway without the discovery server"
+      exit 1
+    fi
+    echo "without the server: not found, as it must be"
+    fast-discovery-server -i 0 -l 127.0.0.1 -p 11811 &
+    server=$!
+    valvectl --timeout 20 list --wait-for 2
+    kill -TERM "$gw"
+    status=0
+    wait "$gw" || status=$?
+    kill -TERM "$server"
+    wait "$server" || true
+    echo "gateway exited $status"'
+
+((failed == 0))
