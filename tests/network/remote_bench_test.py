@@ -24,6 +24,7 @@ import re
 import shutil
 import sys
 import tempfile
+import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -36,6 +37,14 @@ TARGET_DEG = 90.0
 # The gateway's completion tolerance (commands.completion_tolerance_deg, default 1.0).
 TOLERANCE_DEG = 1.0
 DISCOVERY_PORT = "11811"
+
+
+STARTED = time.monotonic()
+
+
+def say(text):
+    """A progress line, with the seconds since the start: where a slow run spends its time."""
+    print(f"[{time.monotonic() - STARTED:5.1f} s] {text}", flush=True)
 
 
 def profile(name):
@@ -87,7 +96,7 @@ class Bench:
         for attempt in range(attempts or self.attempts):
             if attempt:
                 self.retries += 1
-                print(f"{host}: valvectl {argv[0]} found nothing; started again")
+                say(f"{host}: valvectl {argv[0]} found nothing; started again")
             result = self.lab.run(host, command, timeout=timeout_s + 60, env=env)
             if result.returncode != 2:
                 break
@@ -101,7 +110,7 @@ class Bench:
               f"valvectl list on {host} saw {[v['serial'] for v in valves]}, not {SERIALS}")
         check(all(v["online"] and v["gateway"] == "vehicle" for v in valves),
               f"valvectl list on {host}: not all online on gateway 'vehicle': {valves}")
-        print(f"{host}: valvectl list: {', '.join(SERIALS)} online")
+        say(f"{host}: valvectl list: {', '.join(SERIALS)} online")
 
     def start_recorder(self, bench_profile, path):
         """teejet-record on the bench, once it has received its first message."""
@@ -117,20 +126,17 @@ class Bench:
                 return counts and int(counts[-1].replace(",", "")) > 0
 
             if wait_until(receiving, self.timeout):
+                say("bench: teejet-record receiving")
                 return recorder
             self.lab.stop(recorder)
             self.retries += 1
-            print("bench: teejet-record received nothing; started again")
+            say("bench: teejet-record received nothing; started again")
         raise Failure(f"teejet-record on the bench received nothing in {self.attempts} starts")
 
-    def move_and_record(self, bench_profile):
-        """A move from the bench with a recorder beside it; the recording's counts."""
-        recording = os.path.join(self.scratch, "bench.mcap")
-        recorder = self.start_recorder(bench_profile, recording)
-        # --command-readers 2: sent only once the gateway and the recorder both hear commands,
-        # so that the recording must hold the command.
-        move = self.valvectl("bench", bench_profile, "--command-readers", "2", "move", MOVED,
-                             "--to", str(TARGET_DEG), "--wait", "--wait-timeout", "30")
+    def move(self, bench_profile, *options):
+        """valvectl move from the bench: accepted, completed, the telemetry at the target."""
+        move = self.valvectl("bench", bench_profile, *options, "move", MOVED, "--to",
+                             str(TARGET_DEG), "--wait", "--wait-timeout", "30")
         check(move.returncode == 0, f"valvectl move: {describe(move)}")
         events = [json.loads(line) for line in move.stdout.splitlines() if line.strip()]
         states = [e["state"] for e in events if e["event"] == "status"]
@@ -138,17 +144,26 @@ class Bench:
               f"valvectl move statuses {states}, not accepted ... completed")
         positions = [e["degrees"] for e in events if e["event"] == "position"]
         check(positions, "valvectl move printed no position telemetry")
-        # valvectl prints the position every 100 ms, so its last line may predate COMPLETED:
-        # the telemetry the bench holds now is what must have reached the target.
-        listing = self.valvectl("bench", bench_profile, "list", "--wait-for", "4")
-        check(listing.returncode == 0, f"valvectl list after the move: {describe(listing)}")
-        now = {v["serial"]: v["position"] for v in json.loads(listing.stdout)}[MOVED]
+        now = positions[-1]
+        if abs(now - TARGET_DEG) > TOLERANCE_DEG:
+            # valvectl prints the position every 100 ms, so its last line may predate COMPLETED:
+            # then the telemetry the bench holds now is what must have reached the target.
+            listing = self.valvectl("bench", bench_profile, "list", "--wait-for", "4")
+            check(listing.returncode == 0, f"valvectl list after the move: {describe(listing)}")
+            now = {v["serial"]: v["position"] for v in json.loads(listing.stdout)}[MOVED]
         check(now is not None and abs(now - TARGET_DEG) <= TOLERANCE_DEG,
               f"{MOVED}'s position telemetry on the bench is {now}, not {TARGET_DEG} +- "
               f"{TOLERANCE_DEG}")
-        print(f"bench: valvectl move {MOVED} --to {TARGET_DEG}: {' -> '.join(states)}, "
-              f"{len(positions)} positions on the way, {now} after")
+        say(f"bench: valvectl move {MOVED} --to {TARGET_DEG}: {' -> '.join(states)}, "
+            f"{len(positions)} positions on the way, {now} at the end")
 
+    def move_and_record(self, bench_profile):
+        """A move from the bench with a recorder beside it; the recording's counts."""
+        recording = os.path.join(self.scratch, "bench.mcap")
+        recorder = self.start_recorder(bench_profile, recording)
+        # --command-readers 2: sent only once the gateway and the recorder both hear commands,
+        # so that the recording must hold the command.
+        self.move(bench_profile, "--command-readers", "2")
         stopped = self.lab.stop(recorder)
         check(stopped == 0, f"teejet-record exited {stopped}")
         info = self.lab.run("bench", [self.args.record, "--info", recording, "--json"])
@@ -171,7 +186,7 @@ def check_recording(info):
     # ACCEPTED and COMPLETED of the move at least (the statuses are TRANSIENT_LOCAL).
     check(counts["teejet/valve/command_status"] >= 2,
           f"the bench recorded {counts['teejet/valve/command_status']} command statuses, not >= 2")
-    print("bench: recorded " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items())))
+    say("bench: recorded " + ", ".join(f"{t} {n}" for t, n in sorted(counts.items())))
 
 
 def case_plain(bench):
@@ -191,7 +206,7 @@ def case_plain_routed(bench):
     listing = bench.valvectl("bench", plain, "list", "--wait-for", "4", timeout_s=2, attempts=1)
     check(listing.returncode == 2 and "no gateway found on domain 0" in listing.stderr,
           f"valvectl on the bench should find no gateway across the router: {describe(listing)}")
-    print("bench: no gateway found across the router (multicast discovery is blocked), as expected")
+    say("bench: no gateway found across the router (multicast discovery is blocked), as expected")
 
 
 def case_discovery(bench):
@@ -206,15 +221,20 @@ def case_discovery(bench):
     # The server from the environment: Fast DDS 2.9.1 makes a SIMPLE participant its client.
     env = dict(os.environ, ROS_DISCOVERY_SERVER=f"{vehicle}:{DISCOVERY_PORT}")
     bench.lists_all_valves("bench2", profile("fastdds-lan-multicast.xml"), env=env)
-    print("bench2: ROS_DISCOVERY_SERVER with the multicast profile works as well")
+    say("bench2: ROS_DISCOVERY_SERVER with the multicast profile works as well")
 
 
 def case_tcp(bench):
     bench.start_gateway(profile("fastdds-wan-tcp-gateway.xml"))
     tcp_bench = profile("fastdds-wan-tcp-bench.xml")
     bench.lists_all_valves("bench", tcp_bench)
+    if bench.args.netem:
+        # Under netem (user-mode-linux, one slow CPU) each discovery costs seconds: the recorder
+        # and the second bench are left to the run without netem, to keep CI time down.
+        bench.move(tcp_bench)
+        return
     check_recording(bench.move_and_record(tcp_bench))
-    # A second bench at the same time: each is only a client of the gateway's port.
+    # A second bench beside the first: each is only a client of the gateway's port.
     bench.lists_all_valves("bench2", tcp_bench)
 
 
@@ -244,6 +264,7 @@ def main():
     scratch = tempfile.mkdtemp(prefix=f"network-{args.case}-")
     try:
         with Lab(topology, netem=args.netem) as lab:
+            say(f"{topology} lab up{', netem ' + args.netem if args.netem else ''}")
             bench = Bench(args, lab, scratch, attempts)
             run(bench)
     except LabUnavailable as unavailable:
