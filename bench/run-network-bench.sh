@@ -8,7 +8,9 @@
 # For each: the move acceptance latency (the bench's recorder's receive time of the command to
 # that of its ACCEPTED status: a round trip plus the gateway's handling; median and max over
 # --moves moves, each by a fresh valvectl), how long each valvectl ran (discovery included),
-# and the telemetry rate that reaches the bench (samples/s per topic, after the first 2 s).
+# the telemetry rate that reaches the bench (samples/s per topic, after the first 2 s), and how
+# long after a commanding valvectl on the bench is SIGKILLed the gateway's fail-safe stops its
+# valve (3 times; the participant lease of the profiles is 3 s).
 # Every DDS program runs inside the lab (tests/network/lab-run --uml); nothing leaves it.
 #
 #   bench/run-network-bench.sh [--build-dir DIR] [--moves N] [--profiles "ds tcp plain"]
@@ -90,6 +92,29 @@ def status_state(payload):  # after serial, command_id and the origin string: ki
     return struct.unpack_from("<I", payload, pos + 4)[0]  # 0 = COMMAND_ACCEPTED
 
 
+def commander_killed(lab, bench_profile, gateway_log, attempt):
+    """ms from SIGKILL of a jogging valvectl on the bench to the gateway's fail-safe stop."""
+    log = f"{gateway_log}.jog{attempt}"
+    before = open(gateway_log).read().count("fail-safe stopped")
+    for _ in range(ATTEMPTS):
+        jog = lab.spawn("bench", [VALVECTL, "--profile", bench_profile, "--timeout", "20", "jog",
+                                  SERIAL, "--ms", "60000", "--speed", "20", "--wait"], log=log)
+        if wait_until(lambda: "ACCEPTED" in open(log).read() or jog.poll() is not None, 60) and \
+                jog.poll() is None:
+            break
+    else:
+        raise SystemExit("no jog was accepted")
+    killed = time.time()
+    jog.kill()
+    lines = wait_until(lambda: [l for l in open(gateway_log).read().splitlines()
+                                if "fail-safe stopped" in l][before:], 60)
+    if not lines:
+        raise SystemExit("the gateway's fail-safe did not stop the valve within 60 s")
+    stamp = time.mktime(time.strptime(lines[0][1:20], "%Y-%m-%d %H:%M:%S")) + \
+        int(lines[0][21:24]) / 1000
+    return round((stamp - killed) * 1000)
+
+
 def run_profile(name):
     topology = "bridged" if name == "plain" else "routed"
     gateway_profile, bench_profile = {
@@ -136,6 +161,8 @@ def run_profile(name):
                                  f"{result.stderr.strip()}")
             runs.append(time.monotonic() - started)
         lab.stop(recorder)
+        failsafe = [commander_killed(lab, bench_profile, f"{scratch}/gateway.log", i)
+                    for i in range(3)]
     messages = mcap_messages(recording)
     shutil.rmtree(scratch, ignore_errors=True)
     sent = {command_id(p): t for topic, t, p in messages if topic == "teejet/valve/command"}
@@ -159,6 +186,7 @@ def run_profile(name):
             "valvectl_run_s": {"median": round(statistics.median(runs), 2),
                                "max": round(max(runs), 2)},
             "valvectl_restarts": restarts,
+            "failsafe_stop_after_kill_ms": failsafe,
             "telemetry_window_s": round(seconds, 1),
             "samples_per_s": {t.split("/")[-1]: round(n / seconds, 1)
                               for t, n in sorted(rates.items())}}

@@ -74,7 +74,7 @@ class Bench:
         self.scratch = scratch
         # How many times a bench participant may be started before its discovery counts as
         # failed: 1 except over TCP, where Fast DDS 2.9.1 leaves about one new participant in
-        # eight unmatched for good when it connects while another one connects or leaves
+        # six unmatched for good when it connects while another one connects or leaves
         # (docs/remote-benches.md). Nothing has been sent when that happens (valvectl exits 2
         # before writing), so starting it again is what a user does too.
         self.attempts = attempts
