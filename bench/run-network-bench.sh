@@ -40,6 +40,7 @@ import json, os, re, shutil, statistics, struct, sys, tempfile, time
 root, build, moves, netem, *profiles = sys.argv[1:]
 moves = int(moves)
 sys.path.insert(0, os.path.join(root, "tests", "network"))
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 from netlab import Lab, _sh, wait_until  # noqa: E402
 
 GATEWAY = f"{build}/gateway/app/teejet-gateway"

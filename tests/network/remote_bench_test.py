@@ -28,6 +28,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 from netlab import SKIP, Lab, LabUnavailable, wait_until  # noqa: E402
 
 CONFIG = os.path.join(HERE, "..", "..", "config")
