@@ -66,6 +66,9 @@ Status load_profiles_once(const std::string& file) {
   if (factory->load_XML_profiles_file(file) != ReturnCode_t::RETCODE_OK) {
     return refused("cannot load Fast DDS profiles from '" + file + "'");
   }
+  // Fast DDS 2.9 reads the default participant profile only in load_profiles(): without this
+  // reset, a file's is_default_profile would apply only when it is also the environment's.
+  factory->set_default_participant_qos(PARTICIPANT_QOS_DEFAULT);
   loaded.insert(canonical(file));
   return {};
 }
