@@ -6,8 +6,11 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <filesystem>
+#include <fstream>
 
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
@@ -139,6 +142,28 @@ TEST(Participant, FastDdsLogLinesGoToStderrNotStdout) {
             "cannot load Fast DDS profiles from '/nonexistent/profile.xml'");
   EXPECT_EQ(out, "");
   EXPECT_NE(err.find("/nonexistent/profile.xml"), std::string::npos) << err;
+}
+
+// A --profile whose names the environment's file already took would silently leave that
+// file's settings in force (a secure profile then ran without security): it is refused instead.
+TEST(Participant, AProfileClashingWithTheEnvironmentsIsRefusedNotIgnored) {
+  const char* environment = std::getenv("FASTRTPS_DEFAULT_PROFILES_FILE");
+  if (environment == nullptr) GTEST_SKIP() << "runs under tests/netns/isolated, which sets it";
+  const std::string copy = ::testing::TempDir() + "clashing-profile.xml";
+  {
+    std::ifstream original(environment);
+    std::ofstream out(copy);
+    out << original.rdbuf();
+  }
+  const auto refused = Participant::create({.domain = test_domain(), .profile_file = copy});
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.error().reason,
+            "Fast DDS refused part of the profiles in '" + copy +
+                "': a profile or transport name in it is taken by a file loaded before it (" +
+                std::filesystem::weakly_canonical(environment).string() +
+                "), whose settings would apply instead; rename them, or leave "
+                "FASTRTPS_DEFAULT_PROFILES_FILE unset");
+  std::remove(copy.c_str());
 }
 
 TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
