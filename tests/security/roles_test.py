@@ -140,6 +140,19 @@ class Suite:
                 out.write(UNICAST_BASE.format(own=self.hosts.address(host), peers=locators))
         return path
 
+    def profile_with_files(self, name, moved, out_name=None):
+        """NAME's bench profile in the work directory, its security files taken from elsewhere:
+        MOVED maps each site path to the one the profile names instead."""
+        path = os.path.join(self.work, f"{out_name or name}.xml")
+        self.pki("profile", self.site, name, "--base", self.base_for("bench"), "--out", path)
+        with open(path) as source:
+            text = source.read()
+        for site_path, kept_path in moved.items():
+            text = text.replace(f"file://{site_path}", f"file://{kept_path}")
+        with open(path, "w") as out:
+            out.write(text)
+        return path
+
     def env_for(self, profile, host="bench"):
         # The profile is also the process's default file: loaded once, its transports are not
         # declared twice (Fast DDS refuses a second file that repeats a transport id).
@@ -183,29 +196,18 @@ class Suite:
         os.makedirs(stale)
         for name in ("permissions.p7s", "crl.pem"):
             shutil.copy(os.path.join(self.site, name), stale)
-        leaver = os.path.join(self.work, "leaver.xml")
-        self.pki("profile", self.site, "leaver", "--base", self.base_for("bench"), "--out", leaver)
-        with open(leaver) as source:
-            text = source.read()
-        with open(leaver, "w") as out:
-            out.write(text.replace(f"file://{self.site}/permissions.p7s",
-                                   f"file://{stale}/permissions.p7s")
-                      .replace(f"file://{self.site}/crl.pem", f"file://{stale}/crl.pem"))
+        leaver = self.profile_with_files(
+            "leaver", {f"{self.site}/permissions.p7s": f"{stale}/permissions.p7s",
+                       f"{self.site}/crl.pem": f"{stale}/crl.pem"})
         self.pki("revoke", self.site, "leaver")
         # Rotation: the key and certificate before `issue --replace` stay with their profile and
         # the CRL of that time (with the new CRL they would not even start).
         rotor_old = os.path.join(self.work, "rotor-old")
         shutil.copytree(os.path.join(self.site, "participants", "rotor"), rotor_old)
         shutil.copy(os.path.join(self.site, "crl.pem"), rotor_old)
-        rotor_old_profile = os.path.join(self.work, "rotor-old.xml")
-        self.pki("profile", self.site, "rotor", "--base", self.base_for("bench"), "--out",
-                 rotor_old_profile)
-        with open(rotor_old_profile) as source:
-            text = source.read()
-        with open(rotor_old_profile, "w") as out:
-            out.write(text.replace(f"file://{self.site}/participants/rotor/",
-                                   f"file://{rotor_old}/")
-                      .replace(f"file://{self.site}/crl.pem", f"file://{rotor_old}/crl.pem"))
+        rotor_old_profile = self.profile_with_files(
+            "rotor", {f"{self.site}/participants/rotor/": f"{rotor_old}/",
+                      f"{self.site}/crl.pem": f"{rotor_old}/crl.pem"}, out_name="rotor-old")
         self.pki("issue", self.site, "commander", "rotor", "--replace", "--days", "2")
         # The subject written the way round X.509 stores it (O first), not as Fast DDS prints it.
         with open(os.path.join(self.site, "participants", "misfiled", "subject"), "w") as out:
