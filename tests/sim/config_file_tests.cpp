@@ -7,16 +7,14 @@
 
 #include "config_file.hpp"
 #include "example_config.hpp"
+#include "support/text.hpp"
 #include "teejet/codec/codec.hpp"
 
 namespace teejet::sim {
 namespace {
 
+using ::teejet::testing::contains;
 using testing::kExample;
-
-bool mentions(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 // Why `text`, named sim.yaml, is refused; empty (and a failure) when it is not.
 std::string reason(const std::string& text) {
@@ -57,39 +55,39 @@ TEST(SimConfigFile, AnEmptyFileIsNoSettings) {
 }
 
 TEST(SimConfigFile, FileMistakesAreRefusedWithTheLine) {
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    dsp: 90\n"),
+  EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\n    dsp: 90\n"),
                        "sim.yaml:3: valves[0]: unknown key 'dsp'"));
-  EXPECT_TRUE(mentions(reason("valve: []\n"), "unknown key 'valve'"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - dps: 90\n"), "needs a serial"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  dps: fast\n"), "'fast' is not a number"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  opening_direction: left\n"), "neither clockwise"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  bit_rate: 1M\n"), "neither 250000"));
-  EXPECT_TRUE(mentions(reason("defaults:\n  valve_temperature: 200\n"), "-127 to 127"));
-  EXPECT_TRUE(mentions(reason("errors:\n  - {kind: high-voltage, value: 1, limit: 2}\n"),
+  EXPECT_TRUE(contains(reason("valve: []\n"), "unknown key 'valve'"));
+  EXPECT_TRUE(contains(reason("valves:\n  - dps: 90\n"), "needs a serial"));
+  EXPECT_TRUE(contains(reason("defaults:\n  dps: fast\n"), "'fast' is not a number"));
+  EXPECT_TRUE(contains(reason("defaults:\n  opening_direction: left\n"), "neither clockwise"));
+  EXPECT_TRUE(contains(reason("defaults:\n  bit_rate: 1M\n"), "neither 250000"));
+  EXPECT_TRUE(contains(reason("defaults:\n  valve_temperature: 200\n"), "-127 to 127"));
+  EXPECT_TRUE(contains(reason("errors:\n  - {kind: high-voltage, value: 1, limit: 2}\n"),
                        "needs a serial"));
-  EXPECT_TRUE(mentions(reason("errors:\n  - {serial: 1, kind: x, value: 1, limit: 2}\n"),
+  EXPECT_TRUE(contains(reason("errors:\n  - {serial: 1, kind: x, value: 1, limit: 2}\n"),
                        "unknown error kind 'x'"));
-  EXPECT_TRUE(mentions(reason("defaults: [1, 2]\n"), "expected a mapping"));
-  EXPECT_TRUE(mentions(reason("defaults: {dps: [1\n"), "sim.yaml"));  // YAML syntax error
+  EXPECT_TRUE(contains(reason("defaults: [1, 2]\n"), "expected a mapping"));
+  EXPECT_TRUE(contains(reason("defaults: {dps: [1\n"), "sim.yaml"));  // YAML syntax error
   EXPECT_TRUE(
-      mentions(reason("defaults:\n  serial: 5\n"), "sim.yaml:2: defaults: unknown key 'serial'"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    errors:\n      - {serial: 1, kind: "
+      contains(reason("defaults:\n  serial: 5\n"), "sim.yaml:2: defaults: unknown key 'serial'"));
+  EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\n    errors:\n      - {serial: 1, kind: "
                               "low-voltage, value: 9, limit: 10}\n"),
                        "sim.yaml:4: valves[0].errors[0]: unknown key 'serial'"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    errors:\n      - {kind: "
+  EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\n    errors:\n      - {kind: "
                               "high-temperature, value: 300, limit: 85}\n"),
                        "sim.yaml:4: valves[0].errors[0]: high-temperature"));
-  EXPECT_TRUE(mentions(reason("errors: {serial: 1}\n"), "sim.yaml:1: errors: expected a list"));
+  EXPECT_TRUE(contains(reason("errors: {serial: 1}\n"), "sim.yaml:1: errors: expected a list"));
 }
 
 TEST(SimConfigFile, KeysGivenTwiceAreRefusedWithTheLine) {
-  EXPECT_TRUE(mentions(reason("defaults:\n  dps: 100\n  dps: 120\n"),
+  EXPECT_TRUE(contains(reason("defaults:\n  dps: 100\n  dps: 120\n"),
                        "sim.yaml:3: defaults: 'dps' is given twice"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\nvalves:\n  - serial: 2\n"),
+  EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\nvalves:\n  - serial: 2\n"),
                        "sim.yaml:3: top level: 'valves' is given twice"));
-  EXPECT_TRUE(mentions(reason("valves:\n  - serial: 1\n    serial: 2\n"),
+  EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\n    serial: 2\n"),
                        "sim.yaml:3: valves[0]: 'serial' is given twice"));
-  EXPECT_TRUE(mentions(
+  EXPECT_TRUE(contains(
       reason("errors:\n  - {serial: 1, kind: low-voltage, value: 9, limit: 10, value: 8}\n"),
       "sim.yaml:2: errors[0]: 'value' is given twice"));
 }
@@ -97,7 +95,7 @@ TEST(SimConfigFile, KeysGivenTwiceAreRefusedWithTheLine) {
 TEST(SimConfigFile, MissingFileIsReported) {
   const auto file = load_config("/nonexistent/teejet-sim.yaml");
   ASSERT_FALSE(file);
-  EXPECT_TRUE(mentions(file.error().reason, "/nonexistent/teejet-sim.yaml"));
+  EXPECT_TRUE(contains(file.error().reason, "/nonexistent/teejet-sim.yaml"));
 }
 
 }  // namespace

@@ -14,8 +14,6 @@ namespace {
 
 using teejet::testing::eventually;
 
-constexpr auto kDeadline = std::chrono::seconds(5);
-
 const codec::TargetDegrees kOpenTo90{100, codec::TargetDirection::kOpen, 90.0};
 
 TEST(SimValvePower, PowerOffStopsTheMotorAndSilencesTheValve) {

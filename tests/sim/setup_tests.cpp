@@ -5,16 +5,14 @@
 
 #include "example_config.hpp"
 #include "setup.hpp"
+#include "support/text.hpp"
 #include "teejet/codec/codec.hpp"
 
 namespace teejet::sim {
 namespace {
 
+using ::teejet::testing::contains;
 using testing::kExample;
-
-bool mentions(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
-}
 
 // ---- ValveConfig ---------------------------------------------------------------------------
 
@@ -33,9 +31,9 @@ TEST(SimSetup, InvalidConfigurationsNameTheValveAndTheField) {
     change(config);
     const auto status = validate(config);
     EXPECT_FALSE(status) << expected;
-    EXPECT_TRUE(mentions(status.error().reason, expected)) << status.error().reason;
+    EXPECT_TRUE(contains(status.error().reason, expected)) << status.error().reason;
     if (config.serial <= kMaxSerial) {
-      EXPECT_TRUE(mentions(status.error().reason, "TJV000042")) << status.error().reason;
+      EXPECT_TRUE(contains(status.error().reason, "TJV000042")) << status.error().reason;
     }
   };
   refused([](ValveConfig& c) { c.opened_degrees = 341; }, "at most 340");
@@ -79,15 +77,15 @@ TEST(SimSetup, BadErrorSpecsSayWhatIsWrong) {
     EXPECT_FALSE(parsed) << spec;
     return parsed ? std::string() : parsed.error().reason;
   };
-  EXPECT_TRUE(mentions(reason("1:high-voltage:16"), "SERIAL:KIND:VALUE:LIMIT"));
-  EXPECT_TRUE(mentions(reason("x:high-voltage:16:15"), "serial 'x'"));
-  EXPECT_TRUE(mentions(reason("1:sparks:16:15"), "unknown error kind 'sparks'"));
-  EXPECT_TRUE(mentions(reason("1:high-voltage:hot:15"), "must be numbers"));
-  EXPECT_TRUE(mentions(reason("1:high-voltage:16:15:open"), "only min-dps"));
-  EXPECT_TRUE(mentions(reason("1:min-dps:16:15:up"), "open or close"));
-  EXPECT_TRUE(mentions(reason("1:high-temperature:130:100"), "high-temperature"));
-  EXPECT_TRUE(mentions(reason("1:high-temperature:90.5:100"), "whole numbers"));
-  EXPECT_TRUE(mentions(reason("1:low-current:-1:1"), "at least 0"));
+  EXPECT_TRUE(contains(reason("1:high-voltage:16"), "SERIAL:KIND:VALUE:LIMIT"));
+  EXPECT_TRUE(contains(reason("x:high-voltage:16:15"), "serial 'x'"));
+  EXPECT_TRUE(contains(reason("1:sparks:16:15"), "unknown error kind 'sparks'"));
+  EXPECT_TRUE(contains(reason("1:high-voltage:hot:15"), "must be numbers"));
+  EXPECT_TRUE(contains(reason("1:high-voltage:16:15:open"), "only min-dps"));
+  EXPECT_TRUE(contains(reason("1:min-dps:16:15:up"), "open or close"));
+  EXPECT_TRUE(contains(reason("1:high-temperature:130:100"), "high-temperature"));
+  EXPECT_TRUE(contains(reason("1:high-temperature:90.5:100"), "whole numbers"));
+  EXPECT_TRUE(contains(reason("1:low-current:-1:1"), "at least 0"));
 }
 
 TEST(SimSetup, VersionsAndRotationsParse) {
@@ -158,23 +156,23 @@ TEST(SimSetup, CompositionMistakesAreRefused) {
     EXPECT_FALSE(setup);
     return setup ? std::string() : setup.error().reason;
   };
-  EXPECT_TRUE(mentions(reason({}, ""), "no valves"));
+  EXPECT_TRUE(contains(reason({}, ""), "no valves"));
   CommandLine too_many;
   too_many.valve_count = 33;
-  EXPECT_TRUE(mentions(reason(too_many, ""), "1 to 32"));
+  EXPECT_TRUE(contains(reason(too_many, ""), "1 to 32"));
   CommandLine twice;
   twice.serials = {4, 4};
-  EXPECT_TRUE(mentions(reason(twice, ""), "TJV000004 is given twice"));
+  EXPECT_TRUE(contains(reason(twice, ""), "TJV000004 is given twice"));
   CommandLine two;
   two.valve_count = 2;
-  EXPECT_TRUE(mentions(reason(two, "valves:\n  - serial: 9\n"), "TJV000009, which is not"));
+  EXPECT_TRUE(contains(reason(two, "valves:\n  - serial: 9\n"), "TJV000009, which is not"));
   auto with_error = two;
   with_error.errors.push_back({9, {ErrorKind::kHighVoltage, 16, 15}});
-  EXPECT_TRUE(mentions(reason(with_error, ""), "not a simulated valve"));
+  EXPECT_TRUE(contains(reason(with_error, ""), "not a simulated valve"));
   auto bad_flags = two;
   bad_flags.settings.opened_degrees = 350;
-  EXPECT_TRUE(mentions(reason(bad_flags, ""), "at most 340"));
-  EXPECT_TRUE(mentions(reason(two, "hotplug:\n  - serial: 2\n"), "already in the bank"));
+  EXPECT_TRUE(contains(reason(bad_flags, ""), "at most 340"));
+  EXPECT_TRUE(contains(reason(two, "hotplug:\n  - serial: 2\n"), "already in the bank"));
 }
 
 }  // namespace

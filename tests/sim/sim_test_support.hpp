@@ -21,6 +21,9 @@ using namespace std::chrono_literals;
 inline constexpr SteadyTime kT0{std::chrono::seconds(5'000)};
 inline constexpr Timestamp kWallT0{std::chrono::seconds(1'700'000'000)};
 
+// How long a test waits for the simulator's threads to do something.
+inline constexpr auto kDeadline = std::chrono::seconds(5);
+
 // kT0 + milliseconds.
 constexpr SteadyTime at_ms(long long ms) { return kT0 + std::chrono::milliseconds(ms); }
 

@@ -21,8 +21,6 @@ namespace {
 
 using teejet::testing::eventually;
 
-constexpr auto kDeadline = std::chrono::seconds(5);
-
 struct Received {
   std::uint8_t address;
   codec::FromValveMessage message;

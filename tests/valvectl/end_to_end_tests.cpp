@@ -18,6 +18,7 @@
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
 #include "support/test_domain.hpp"
+#include "support/text.hpp"
 #include "teejet/codec/codec.hpp"
 
 namespace teejet::testing {
@@ -49,10 +50,6 @@ std::vector<std::string> split_lines(const std::string& text) {
     if (!line.empty()) lines.push_back(line);
   }
   return lines;
-}
-
-bool contains(const std::string& text, const std::string& part) {
-  return text.find(part) != std::string::npos;
 }
 
 std::string describe(const Finished& finished) {
@@ -345,12 +342,14 @@ TEST_F(ValvectlEndToEnd, WatchAsJsonPrintsOneArrayPerRefreshAndEndsWithExitZeroO
 }
 
 TEST_F(ValvectlEndToEnd, WatchAsTextPrintsATablePerRefreshWithoutScreenControlIntoAPipe) {
-  Subprocess watching({VALVECTL_PATH, "--domain", domain_text(), "watch", "--interval", "100"});
+  Subprocess watching({VALVECTL_PATH, "--domain", domain_text(), "watch", "--interval", "100",
+                       "--title", "dashboard: http://127.0.0.1:8080/"});
   ASSERT_TRUE(watching.wait_for_stdout(codec::format_serial(kValveCount), 15s));
   watching.signal(SIGINT);
   const auto watched = watching.wait(15s);
   EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
-  EXPECT_TRUE(contains(watched.out, "valvectl watch: domain " + domain_text()));
+  EXPECT_TRUE(contains(
+      watched.out, "dashboard: http://127.0.0.1:8080/\nvalvectl watch: domain " + domain_text()));
   EXPECT_TRUE(contains(watched.out,
                        "gateway " + gateway_->name() + " on sim:" + std::to_string(kValveCount)));
   EXPECT_TRUE(contains(watched.out, "SERIAL     ADDR  ONLINE"));

@@ -3,19 +3,13 @@
 #include <gtest/gtest.h>
 
 #include "names.hpp"
+#include "support/valve_samples.hpp"
 #include "valve_table.hpp"
 
 namespace teejet::valvectl {
 namespace {
 
-ValvePresence presence(std::uint32_t serial, bool online, const std::string& gateway = "gw") {
-  ValvePresence p;
-  p.serial(serial);
-  p.address(static_cast<std::uint8_t>(0xD8 + serial));
-  p.online(online);
-  p.gateway(gateway);
-  return p;
-}
+using teejet::testing::presence;
 
 GatewayStatus gateway_status(const std::string& name, std::uint32_t known) {
   GatewayStatus s;
