@@ -86,7 +86,7 @@ TEST(ValvectlCommandLine, DefaultsAreDomainZeroAndFiveSeconds) {
   EXPECT_TRUE(outcome.invocation->global.profile_file.empty());
 }
 
-TEST(ValvectlCommandLine, WatchTakesIntervalAndDuration) {
+TEST(ValvectlCommandLine, WatchTakesIntervalDurationAndTitle) {
   const auto outcome = parse({"watch", "--interval", "200", "--duration", "1.5"});
   ASSERT_TRUE(outcome.invocation) << outcome.err;
   EXPECT_EQ(outcome.invocation->subcommand, Subcommand::kWatch);
@@ -96,6 +96,10 @@ TEST(ValvectlCommandLine, WatchTakesIntervalAndDuration) {
   ASSERT_TRUE(forever.invocation);
   EXPECT_EQ(forever.invocation->watch.interval, 1000ms);
   EXPECT_FALSE(forever.invocation->watch.duration);
+  EXPECT_EQ(forever.invocation->watch.title, "");
+  const auto titled = parse({"watch", "--title", "dashboard: http://127.0.0.1:8080/"});
+  ASSERT_TRUE(titled.invocation);
+  EXPECT_EQ(titled.invocation->watch.title, "dashboard: http://127.0.0.1:8080/");
 }
 
 TEST(ValvectlCommandLine, StopTakesOneSerialOrAll) {
@@ -224,6 +228,7 @@ TEST(ValvectlCommandLine, EmptyValuesAreRefusedNamingTheOption) {
       {{"list", "--wait-for", ""}, "--wait-for: the value is empty"},
       {{"watch", "--interval", ""}, "--interval: the value is empty"},
       {{"watch", "--duration", ""}, "--duration: the value is empty"},
+      {{"watch", "--title", ""}, "--title: the value is empty"},
       {{"--timeout", "", "list"}, "--timeout: the value is empty"},
       {{"--domain", "", "list"}, "--domain: the value is empty"},
       {{"--profile", "", "list"}, "--profile: File does not exist"},

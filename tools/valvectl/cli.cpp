@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "command_check.hpp"
 #include "exit_codes.hpp"
 #include "names.hpp"
 #include "teejet/codec/codec.hpp"
@@ -169,6 +170,8 @@ void define(Parser& parser) {
       ->check(CLI::Range(50, 3'600'000));
   parser.duration = parser.watch->add_option("--duration", raw.duration_seconds,
                                              "stop after this many seconds (default: Ctrl-C)");
+  parser.watch->add_option("--title", parser.invocation.watch.title,
+                           "a line above the table on every refresh (e.g. a dashboard's URL)");
 
   parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
   add_serial(parser.move, raw);
@@ -239,22 +242,12 @@ Direction checked_direction(const std::string& word, bool allow_shortest) {
   return *direction;
 }
 
-codec::Direction drive_direction(const std::string& word) {
-  return checked_direction(word, /*allow_shortest=*/false) == DIRECTION_OPEN
-             ? codec::Direction::kOpen
-             : codec::Direction::kClose;
+codec::Direction drive_direction_option(const std::string& word) {
+  return drive_direction(checked_direction(word, /*allow_shortest=*/false));
 }
 
-codec::TargetDirection target_direction(const std::string& word) {
-  switch (checked_direction(word, /*allow_shortest=*/true)) {
-    case DIRECTION_OPEN:
-      return codec::TargetDirection::kOpen;
-    case DIRECTION_CLOSE:
-      return codec::TargetDirection::kClose;
-    case DIRECTION_SHORTEST:
-      break;
-  }
-  return codec::TargetDirection::kShortest;
+codec::TargetDirection target_direction_option(const std::string& word) {
+  return target_direction(checked_direction(word, /*allow_shortest=*/true));
 }
 
 // The options that carry each field of the protocol's messages.
@@ -267,15 +260,12 @@ constexpr std::array<std::pair<std::string_view, std::string_view>, 5> kOptionOf
 }};
 
 // The command for `message`, once the codec has checked every value against the sheet, as the
-// gateway will. The codec names the message and the field ("manual: speed_percent 101 is
-// outside 0 to 100"); the person typed an option, so the message names that instead.
+// gateway will. The codec names the field ("speed_percent 101 is outside 0 to 100"); the person
+// typed an option, so the message names that instead.
 ValveCommand checked(const codec::ToValveMessage& message) {
-  const auto frame = codec::encode(codec::kFirstValveAddress, message);
-  if (frame) return dds::to_command(message);
-  std::string reason = frame.error().reason;
-  if (const auto after_name = reason.find(": "); after_name != std::string::npos) {
-    reason.erase(0, after_name + 2);
-  }
+  auto command = checked_command(message);
+  if (command) return *command;
+  std::string reason = command.error().reason;
   for (const auto& [field, option] : kOptionOfField) {
     if (reason.starts_with(std::string(field) + " ")) {
       reason.replace(0, field.size(), option);
@@ -301,15 +291,15 @@ void build_command(Parser& parser, CLI::App* used) {
   if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
 
   if (used == parser.move) {
-    command =
-        checked(codec::TargetDegrees{raw.speed, target_direction(raw.direction), raw.degrees});
+    command = checked(
+        codec::TargetDegrees{raw.speed, target_direction_option(raw.direction), raw.degrees});
   } else if (used == parser.stop) {
     command = checked(codec::Stop{});
   } else if (used == parser.manual) {
-    command = checked(codec::Manual{raw.speed, drive_direction(raw.direction)});
+    command = checked(codec::Manual{raw.speed, drive_direction_option(raw.direction)});
   } else if (used == parser.jog) {
-    command = checked(
-        codec::MillisecondsToRun{raw.speed, drive_direction(raw.direction), raw.milliseconds});
+    command = checked(codec::MillisecondsToRun{raw.speed, drive_direction_option(raw.direction),
+                                               raw.milliseconds});
     // The run itself may take longer than the default backstop.
     if (parser.wait_timeout->count() == 0) {
       request.wait_timeout += std::chrono::milliseconds(raw.milliseconds);

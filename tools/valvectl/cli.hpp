@@ -32,6 +32,7 @@ struct ListOptions {
 struct WatchOptions {
   std::chrono::milliseconds interval{1000};
   std::optional<std::chrono::milliseconds> duration;  // nullopt: until Ctrl-C
+  std::string title;  // shown above the table on every refresh, which clears the screen
 };
 
 // A valve command subcommand: the command to write to each valve and how far to follow it.

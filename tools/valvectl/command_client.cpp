@@ -47,13 +47,14 @@ bool wait_for_match(const std::function<int()>& matched, std::size_t wanted, Dea
 
 }  // namespace
 
-std::string default_origin() {
+std::string default_origin(std::string_view program) {
   std::array<char, 256> host{};
   if (::gethostname(host.data(), host.size() - 1) != 0) host[0] = '\0';
   // Appended, not "a" + b: GCC 12 reports a false -Wrestrict on that at -O3.
   std::string pid = ":";
   pid += std::to_string(::getpid());
-  std::string origin = "valvectl@";
+  std::string origin(program);
+  origin += '@';
   origin += host.data();
   // Keep the PID, which tells two runs on one host apart, when a long host name must be cut.
   origin.resize(std::min(origin.size(), kMaxOriginLength - pid.size()));

@@ -15,14 +15,15 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "teejet/dds/participant.hpp"
 #include "valve_view.hpp"
 
 namespace teejet::valvectl {
 
-// "valvectl@HOST:PID", at most 64 characters (the IDL's bound).
-std::string default_origin();
+// "PROGRAM@HOST:PID", at most 64 characters (the IDL's bound).
+std::string default_origin(std::string_view program = "valvectl");
 
 class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
  public:

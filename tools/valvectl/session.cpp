@@ -163,6 +163,7 @@ class Session {
       const std::time_t now = std::time(nullptr);
       std::tm local{};
       localtime_r(&now, &local);
+      if (!invocation_.watch.title.empty()) terminal_.out << invocation_.watch.title << '\n';
       terminal_.out << "valvectl watch: " << domain_text() << ", "
                     << std::put_time(&local, "%H:%M:%S") << '\n';
       if (table.empty()) terminal_.out << "no gateway found yet\n";

@@ -79,6 +79,9 @@ void ValveTable::on_gateway_status(const GatewayStatus& status) {
   summary.frames_in = status.frames_in();
   summary.frames_out = status.frames_out();
   summary.decode_errors = status.decode_errors();
+  summary.tx_errors = status.tx_errors();
+  summary.rx_errors = status.rx_errors();
+  summary.rx_dropped = status.rx_dropped();
 }
 
 void ValveTable::on_reply(std::uint32_t serial, const std::string& name, Reply reply) {

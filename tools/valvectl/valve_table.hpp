@@ -37,6 +37,9 @@ struct GatewaySummary {
   std::uint64_t frames_in = 0;
   std::uint64_t frames_out = 0;
   std::uint64_t decode_errors = 0;
+  std::uint16_t tx_errors = 0;  // the CAN controller's error counters
+  std::uint16_t rx_errors = 0;
+  std::uint64_t rx_dropped = 0;
 };
 
 // A valve's answer to a request, as named fields in engineering units.

@@ -1,0 +1,36 @@
+#include "command_check.hpp"
+
+#include "teejet/codec/can_id.hpp"
+#include "teejet/codec/codec.hpp"
+#include "teejet/dds/conversions.hpp"
+
+namespace teejet::valvectl {
+
+Result<ValveCommand> checked_command(const codec::ToValveMessage& message) {
+  // Any valve address will do: the range rules do not depend on it.
+  const auto frame = codec::encode(codec::kFirstValveAddress, message);
+  if (frame) return dds::to_command(message);
+  Error error = frame.error();
+  if (const auto after_name = error.reason.find(": "); after_name != std::string::npos) {
+    error.reason.erase(0, after_name + 2);
+  }
+  return error;
+}
+
+codec::Direction drive_direction(Direction direction) {
+  return direction == DIRECTION_OPEN ? codec::Direction::kOpen : codec::Direction::kClose;
+}
+
+codec::TargetDirection target_direction(Direction direction) {
+  switch (direction) {
+    case DIRECTION_OPEN:
+      return codec::TargetDirection::kOpen;
+    case DIRECTION_CLOSE:
+      return codec::TargetDirection::kClose;
+    case DIRECTION_SHORTEST:
+      break;
+  }
+  return codec::TargetDirection::kShortest;
+}
+
+}  // namespace teejet::valvectl
