@@ -45,6 +45,8 @@ PACKAGES=(
   libfmt-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  # the HTTP and WebSocket server of teejet-web (tools/teejet-web)
+  libcivetweb-dev
   # MCAP recordings (tools/mcap): chunk compression and CRC-32
   libzstd-dev
   liblz4-dev
@@ -53,6 +55,12 @@ PACKAGES=(
   can-utils
   python3
   python3-can
+  # the dashboard's browser test (tests/web/browser_test.py): headless Chromium driven by Selenium
+  chromium
+  chromium-driver
+  python3-selenium
+  # tools/demo carries the dashboard out of its network namespace through a Unix socket
+  socat
   # docs/recording.md's plot of a recording (tools/plot-recording.py)
   python3-matplotlib
   # isolated kernel for vcan tests without host privileges
@@ -91,6 +99,7 @@ BUILD_PACKAGES=(
   libfmt-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
+  libcivetweb-dev
   libzstd-dev
   liblz4-dev
   zlib1g-dev

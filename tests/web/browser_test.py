@@ -1,0 +1,366 @@
+#!/usr/bin/env python3
+"""The dashboard page in a real browser (issue 13), run inside a private network namespace.
+
+A gateway with 4 simulated valves (--can sim:4), one teejet-web with --allow-commands and one
+read-only, and headless Chromium driven by Selenium through chromedriver:
+
+  (a) the page shows exactly the cards TJV000001..TJV000004, all online;
+  (b) a move of TJV000002 to 90 degrees typed and clicked in the page reaches "completed" in the
+      card's status line, and the dial's reading and needle follow to 90 +- 1;
+  (c) the read-only page has no command controls in its DOM, and a WebSocket opened by the page's
+      own JavaScript that sends a move gets "refused" with the read-only reason; the valve stays;
+  (d) a screenshot of the commanding page after the move (the plot showing it) is kept in the
+      working directory as web-dashboard.png, and copied to --screenshot PATH when given;
+  (e) when the read-only teejet-web stops, its page says it is reconnecting, and it is back with
+      its 4 cards by itself once teejet-web runs again;
+  (f) with --token, the page asks for it: a Stop without it is refused with the reason shown in
+      the card; with it the command is sent and reaches its final status.
+
+Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Every wait is a
+condition with a deadline; every failure says what differed.
+"""
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+
+COMMANDS_PORT = 18180
+READONLY_PORT = 18181
+TOKEN_PORT = 18182
+TOKEN = "s3cret"
+SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
+READ_ONLY_REASON = ("commands are disabled: teejet-web runs read-only (start it with "
+                    "--allow-commands)")
+
+try:
+    from selenium import webdriver
+    from selenium.common.exceptions import TimeoutException
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select, WebDriverWait
+except ImportError:
+    print("SKIP: python3-selenium is not installed (tools/install-deps.sh)")
+    sys.exit(77)
+
+
+class Failure(Exception):
+    pass
+
+
+def check(condition, message):
+    if not condition:
+        raise Failure(message)
+
+
+def wait_for(driver, seconds, what, probe, ok):
+    """Polls probe() until ok(value); on timeout fails naming `what` and the last value seen."""
+    seen = [None]
+
+    def ready(_):
+        seen[0] = probe()
+        return ok(seen[0])
+
+    try:
+        WebDriverWait(driver, seconds, poll_frequency=0.05).until(ready)
+    except TimeoutException:
+        raise Failure(f"{what} not within {seconds} s; last seen: {seen[0]!r}") from None
+    return seen[0]
+
+
+def wait_for_server(port, process, seconds):
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        check(process.poll() is None, f"teejet-web on {port} exited {process.returncode}")
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/valves", timeout=2):
+                return
+        except OSError:
+            time.sleep(0.05)  # not listening yet: the next try is the condition
+    raise Failure(f"teejet-web on port {port} did not answer within {seconds} s")
+
+
+CARDS_JS = """
+return [...document.querySelectorAll('#cards .card')].map(c => ({
+  serial: c.dataset.serial, online: c.dataset.online,
+  position: c.querySelector('.position').textContent,
+  needle: c.querySelector('.needle').getAttribute('data-degrees'),
+  status: c.querySelector('.command-status').textContent,
+  state: c.querySelector('.command-status').dataset.state || null,
+  final: c.querySelector('.command-status').dataset.final || null}));
+"""
+
+
+def cards(driver):
+    return driver.execute_script(CARDS_JS)
+
+
+def card(driver, serial):
+    return next((c for c in cards(driver) if c["serial"] == serial), None)
+
+
+def open_page(driver, port):
+    driver.get(f"http://127.0.0.1:{port}/")
+    wait_for(driver, 15, "4 online cards TJV000001..TJV000004 and a connected page",
+             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                      [(c["serial"], c["online"]) for c in cards(driver)]),
+             lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
+
+
+def degrees(text):
+    try:
+        return float(text.rstrip("°"))
+    except (AttributeError, ValueError):
+        return None
+
+
+def commanding_page(driver, artifacts, screenshot):
+    open_page(driver, COMMANDS_PORT)
+    check(driver.find_elements(By.ID, "stop-all"), "the commanding page has no Stop all button")
+    mode = driver.find_element(By.ID, "mode").text
+    check(mode == "commands allowed", f"mode badge: {mode!r}, not 'commands allowed'")
+    print("(a) 4 cards TJV000001..TJV000004 online")
+
+    target = driver.find_element(By.CSS_SELECTOR, '.card[data-serial="TJV000002"]')
+    before = card(driver, "TJV000002")
+    check(degrees(before["position"]) is not None and abs(degrees(before["position"]) - 90) > 5,
+          f"TJV000002 is already at {before['position']}: the move would prove nothing")
+    field = target.find_element(By.CSS_SELECTOR, ".move-degrees")
+    field.clear()
+    field.send_keys("90")
+    speed = target.find_element(By.CSS_SELECTOR, ".move-speed")
+    speed.clear()
+    speed.send_keys("100")
+    Select(target.find_element(By.CSS_SELECTOR, ".move-direction")).select_by_value("shortest")
+    frames_before = driver.execute_script("return window.teejetDashboard.stats.frames_painted")
+    target.find_element(By.CSS_SELECTOR, ".move-send").click()
+    final = wait_for(driver, 30, "a final status of the move in TJV000002's status line",
+                     lambda: card(driver, "TJV000002"), lambda c: c["final"] == "true")
+    check(final["state"] == "completed" and "completed" in final["status"],
+          f"TJV000002's status line: {final['status']!r} (state {final['state']}), not completed")
+    check(final["status"].startswith("target_degrees #"),
+          f"status line {final['status']!r} does not name the target_degrees command")
+    moved = wait_for(driver, 10, "TJV000002's dial at 90 +- 1 (reading and needle)",
+                     lambda: card(driver, "TJV000002"),
+                     lambda c: (degrees(c["position"]) is not None and c["needle"] is not None
+                                and abs(degrees(c["position"]) - 90) <= 1
+                                and abs(float(c["needle"]) - 90) <= 1))
+    # The simulated valve then comes to rest on its target; (c) watches it stay there.
+    wait_for(driver, 10, "TJV000002 at rest on 90.0", lambda: card(driver, "TJV000002"),
+             lambda c: c["position"] == "90.0°" and c["needle"] == "90")
+    others = [c for c in cards(driver) if c["serial"] != "TJV000002" and c["state"] is not None]
+    check(not others, f"a status line on a valve that was not commanded: {others}")
+    print(f"(b) move to 90 completed: status {final['status']!r}, dial {moved['position']}, "
+          f"needle {moved['needle']}")
+
+    # The plot has painted the movement, on its shortest window, before the picture is taken.
+    Select(driver.find_element(By.ID, "plot-window")).select_by_value("60")
+    wait_for(driver, 5, "a plot repaint after the move",
+             lambda: driver.execute_script("return window.teejetDashboard.stats"),
+             lambda s: s["frames_painted"] > frames_before + 1)
+    stats = driver.execute_script("return window.teejetDashboard.stats")
+    for key in ("messages", "updates_per_s", "valve_updates", "valve_updates_per_s",
+                "last_message_ms", "frames_painted"):
+        check(key in stats, f"window.teejetDashboard.stats has no {key}: {stats}")
+    check(stats["messages"] > 0 and stats["valve_updates"] > 0, f"page statistics: {stats}")
+    path = os.path.join(artifacts, "web-dashboard.png")
+    check(driver.save_screenshot(path), f"could not save the screenshot to {path}")
+    print(f"(d) screenshot: {path}")
+    if screenshot:
+        shutil.copyfile(path, screenshot)
+        print(f"(d) copied to {screenshot}")
+    return moved
+
+
+def read_only_page(driver):
+    open_page(driver, READONLY_PORT)
+    mode = driver.find_element(By.ID, "mode").text
+    check(mode == "read-only", f"mode badge: {mode!r}, not 'read-only'")
+    controls = driver.execute_script("""
+      return [...document.querySelectorAll(
+          '.cmd, button, form, #stop-all, #token, input:not(.plot-pick), ' +
+          'select:not(#plot-field):not(#plot-window)')].map(e => e.outerHTML.slice(0, 80));""")
+    check(controls == [], f"command controls in the read-only page's DOM: {controls}")
+    before = card(driver, "TJV000002")
+    answer = driver.execute_async_script("""
+      const done = arguments[arguments.length - 1];
+      const ws = new WebSocket(`ws://${location.host}/ws`);
+      ws.onmessage = (event) => {
+        const message = JSON.parse(event.data);
+        if (message.type === 'snapshot') {
+          ws.send(JSON.stringify({id: 41, command: 'move', serial: 'TJV000002', degrees: 10,
+                                  speed_percent: 100, direction: 'shortest'}));
+        } else if (message.type === 'refused' || message.type === 'sent') {
+          ws.close();
+          done(message);
+        }
+      };
+      ws.onerror = () => done({type: 'websocket error'});""")
+    check(answer == {"type": "refused", "id": 41, "reason": READ_ONLY_REASON},
+          f"answer to a move from the read-only page: {answer}")
+    # The valve does not move: watch it while the page takes 3 more updates. Each one comes
+    # with new gateway counters (a poll of the valves, about once a second) or a changed valve,
+    # so that is over a second of polls: enough for a sent move to start turning it.
+    messages = driver.execute_script("return window.teejetDashboard.stats.messages")
+    wait_for(driver, 15, "3 more messages on the read-only page",
+             lambda: driver.execute_script("return window.teejetDashboard.stats.messages"),
+             lambda n: n >= messages + 3)
+    after = card(driver, "TJV000002")
+    check(after["position"] == before["position"] and after["needle"] == before["needle"],
+          f"TJV000002 moved on a read-only page: {before['position']} -> {after['position']}")
+    print(f"(c) read-only: no controls, move refused ({answer['reason']!r}), TJV000002 stays at "
+          f"{after['position']}")
+
+
+def token_page(driver):
+    open_page(driver, TOKEN_PORT)
+    mode = driver.find_element(By.ID, "mode").text
+    check(mode == "commands allowed (token)", f"mode badge: {mode!r}")
+    check(driver.find_elements(By.ID, "token"), "no token field on a page that needs one")
+    stop = driver.find_element(By.CSS_SELECTOR, '.card[data-serial="TJV000003"] .stop')
+    stop.click()
+    refused = wait_for(driver, 10, "TJV000003's Stop without a token answered",
+                       lambda: card(driver, "TJV000003"), lambda c: c["state"] == "refused")
+    check(refused["status"] == 'refused: missing or wrong "token"',
+          f"status line of a Stop without the token: {refused['status']!r}")
+    driver.find_element(By.ID, "token").send_keys(TOKEN)
+    stop.click()
+    sent = wait_for(driver, 15, "TJV000003's Stop with the token reaching the gateway",
+                    lambda: card(driver, "TJV000003"),
+                    lambda c: c["state"] not in ("refused", "sent", None))
+    check(sent["status"].startswith("stop #"), f"status line of a Stop with the token: "
+                                                f"{sent['status']!r} ({sent['state']})")
+    print(f"(f) token: refused without it, {sent['status']!r} with it")
+
+
+def reconnects(driver, restart):
+    """The page shows that its server went away, and comes back by itself when it returns."""
+    stopped = restart.stop()
+    wait_for(driver, 10, "the connection badge saying reconnecting",
+             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                      driver.find_element(By.ID, "connection").text),
+             lambda seen: seen[0] == "reconnecting" and seen[1].startswith("reconnecting in"))
+    check(stopped == 0, f"the read-only teejet-web exited {stopped} after SIGTERM")
+    restart.start()
+    wait_for(driver, 20, "the page connected again with 4 online cards",
+             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                      [(c["serial"], c["online"]) for c in cards(driver)]),
+             lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
+    print("(e) the page showed reconnecting while teejet-web was down, and came back by itself")
+
+
+class Restartable:
+    def __init__(self, argv, log):
+        self.argv, self.log = argv, log
+        self.process = None
+        self.start()
+
+    def start(self):
+        self.process = subprocess.Popen(self.argv, stdout=open(self.log, "a"),
+                                        stderr=subprocess.STDOUT)
+
+    def stop(self):
+        self.process.terminate()
+        try:
+            return self.process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            return self.process.wait()
+
+    def poll(self):
+        return self.process.poll()
+
+    def terminate(self):
+        self.process.terminate()
+
+    def wait(self, timeout):
+        return self.process.wait(timeout=timeout)
+
+    def kill(self):
+        self.process.kill()
+
+    @property
+    def returncode(self):
+        return self.process.returncode
+
+
+def start_browser(work):
+    options = webdriver.ChromeOptions()
+    options.binary_location = shutil.which("chromium")
+    for argument in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+                     "--window-size=1400,1000", "--disable-gpu", "--no-first-run",
+                     "--hide-scrollbars", f"--user-data-dir={os.path.join(work, 'chromium')}"):
+        options.add_argument(argument)
+    service = Service(shutil.which("chromedriver"), log_path=os.path.join(work, "chromedriver.log"))
+    return webdriver.Chrome(service=service, options=options)
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--gateway", required=True)
+    parser.add_argument("--web", required=True)
+    parser.add_argument("--artifacts", default=os.getcwd(),
+                        help="where web-dashboard.png is kept (default: the working directory)")
+    parser.add_argument("--screenshot", help="also copy the screenshot here (the README's)")
+    args = parser.parse_args()
+    for program in ("chromium", "chromedriver"):
+        if not shutil.which(program):
+            print(f"SKIP: {program} is not installed (tools/install-deps.sh)")
+            return 77
+
+    work = tempfile.mkdtemp(prefix="teejet-web-browser-")
+    logs = {name: os.path.join(work, f"{name}.log") for name in ("gateway", "web", "web-ro", "web-token")}
+    processes = [subprocess.Popen([args.gateway, "--can", "sim:4"],
+                                  stdout=open(logs["gateway"], "w"), stderr=subprocess.STDOUT)]
+    commanding = subprocess.Popen([args.web, "--listen", f"127.0.0.1:{COMMANDS_PORT}",
+                                   "--allow-commands"],
+                                  stdout=open(logs["web"], "w"), stderr=subprocess.STDOUT)
+    read_only = Restartable([args.web, "--listen", f"127.0.0.1:{READONLY_PORT}"], logs["web-ro"])
+    with_token = subprocess.Popen([args.web, "--listen", f"127.0.0.1:{TOKEN_PORT}",
+                                   "--allow-commands", "--token", TOKEN],
+                                  stdout=open(logs["web-token"], "w"), stderr=subprocess.STDOUT)
+    processes += [commanding, read_only, with_token]
+    driver = None
+    start = time.monotonic()
+    try:
+        wait_for_server(COMMANDS_PORT, commanding, 15)
+        wait_for_server(READONLY_PORT, read_only, 15)
+        driver = start_browser(work)
+        commanding_page(driver, args.artifacts, args.screenshot)
+        read_only_page(driver)
+        reconnects(driver, read_only)
+        wait_for_server(TOKEN_PORT, with_token, 15)
+        token_page(driver)
+    except Failure as failure:
+        print(f"FAIL: {failure}")
+        if driver:
+            path = os.path.join(args.artifacts, "web-dashboard-failure.png")
+            driver.save_screenshot(path)
+            print(f"page at the failure: {path}")
+        for name, path in logs.items():
+            print(f"--- {name}.log\n{open(path).read()[-3000:]}")
+        return 1
+    finally:
+        if driver:
+            driver.quit()
+        for process in reversed(processes):
+            process.terminate()
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+    for process, name in ((commanding, "commanding"), (read_only, "read-only"),
+                          (with_token, "token")):
+        if process.returncode != 0:
+            print(f"FAIL: the {name} teejet-web exited {process.returncode} after SIGTERM")
+            return 1
+    print(f"PASS in {time.monotonic() - start:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

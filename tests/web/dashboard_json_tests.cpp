@@ -1,0 +1,186 @@
+// The JSON teejet-web sends: the valve table, gateway health and the batched updates.
+
+#include <gtest/gtest.h>
+
+#include "dashboard_json.hpp"
+#include "web_fixture.hpp"
+
+namespace teejet::web {
+namespace {
+
+using nlohmann::json;
+using testing::presence;
+using testing::three_valves;
+
+GatewayStatus bench_status() {
+  GatewayStatus s;
+  s.gateway("bench");
+  s.can_interface("can0");
+  s.bus_state(BUS_ERROR_WARNING);
+  s.tx_errors(97);
+  s.rx_errors(3);
+  s.frames_in(1200);
+  s.frames_out(340);
+  s.decode_errors(2);
+  s.rx_dropped(5);
+  s.valves_online(2);
+  s.valves_known(3);
+  return s;
+}
+
+CommandStatus status(std::uint32_t serial, std::uint32_t id, CommandState state) {
+  CommandStatus s;
+  s.serial(serial);
+  s.command_id(id);
+  s.origin("teejet-web@host:1");
+  s.kind(COMMAND_TARGET_DEGREES);
+  s.state(state);
+  s.stamp_ns(1000);
+  return s;
+}
+
+ValveCommand move(std::uint32_t serial, std::uint32_t id, float degrees) {
+  ValveCommand c;
+  c.serial(serial);
+  c.command_id(id);
+  c.kind(COMMAND_TARGET_DEGREES);
+  c.degrees(degrees);
+  return c;
+}
+
+TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
+  valvectl::ValveTable table;
+  table.on_presence(presence(1, true));
+  table.on_position(1, 45.3, 10);
+  table.on_temperature(1, 25, 31, 10);
+  table.on_voltage(1, 12.1, 10);
+  table.on_error(1, ERROR_HIGH_CURRENT);
+  table.on_reply(1, "current", {10, {{"amps", 0.35}, {"last_running_amps", 0.5}}});
+  table.on_reply(1, "speed_direction",
+                 {10, {{"speed_percent", 80}, {"direction", "open"}, {"opening_direction", "cw"}}});
+  const json expected = {
+      {"serial", "TJV000001"}, {"address", 217},
+      {"online", true},        {"boot_mode", false},
+      {"position", 45.3},      {"temperature_c", 25},
+      {"volts", 12.1},         {"errors", json::array({"high_current"})},
+      {"gateway", "gw"},       {"target", 90.0},
+      {"amps", 0.35},          {"speed_percent", 80},
+      {"direction", "open"},
+  };
+  EXPECT_EQ(valves_json(table, {{1, 90.0}}), json::array({expected}));
+}
+
+TEST(WebValves, UnknownValuesAreNullAndValvesAreSortedBySerial) {
+  const json valves = valves_json(three_valves(), {});
+  ASSERT_EQ(valves.size(), 3u);
+  EXPECT_EQ(valves[0]["serial"], "TJV000001");
+  EXPECT_EQ(valves[2]["serial"], "TJV000003");
+  EXPECT_EQ(valves[2]["online"], false);
+  for (const char* field :
+       {"position", "temperature_c", "volts", "target", "amps", "speed_percent", "direction"}) {
+    EXPECT_TRUE(valves[0][field].is_null()) << field;
+  }
+  EXPECT_EQ(valves[0]["errors"], json::array());
+}
+
+TEST(WebValves, AnEmptyTableIsAnEmptyArray) { EXPECT_EQ(valves_json({}, {}).dump(), "[]"); }
+
+TEST(WebGateways, HealthHasBusStateErrorCountersFramesAndDrops) {
+  valvectl::ValveTable table;
+  table.on_gateway_status(bench_status());
+  EXPECT_EQ(gateways_json(table).dump(),
+            R"([{"bus_state":"error_warning","can_interface":"can0","decode_errors":2,)"
+            R"("frames_in":1200,"frames_out":340,"gateway":"bench","rx_dropped":5,"rx_errors":3,)"
+            R"("tx_errors":97,"valves_known":3,"valves_online":2}])");
+}
+
+TEST(WebUpdates, TheSnapshotHoldsEverythingAndAQuietTickSendsNothing) {
+  valvectl::ValveTable table = three_valves();
+  table.on_gateway_status(bench_status());
+  UpdateBatcher batcher;
+  const json snapshot = batcher.snapshot(dashboard_frame(table, {}));
+  EXPECT_EQ(snapshot["type"], "snapshot");
+  EXPECT_EQ(snapshot["valves"].size(), 3u);
+  EXPECT_EQ(snapshot["gateways"].size(), 1u);
+  EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 1000), std::nullopt);
+}
+
+TEST(WebUpdates, ATickCarriesOnlyTheLatestStateOfWhatChangedSinceTheLastOne) {
+  valvectl::ValveTable table = three_valves();
+  UpdateBatcher batcher;
+  batcher.snapshot(dashboard_frame(table, {}));
+  // Three samples of valve 2 between ticks: one entry, the latest.
+  table.on_position(2, 10.0, 1);
+  table.on_position(2, 10.5, 2);
+  table.on_position(2, 11.0, 3);
+  const auto update = batcher.tick(dashboard_frame(table, {}), 40);
+  ASSERT_TRUE(update);
+  EXPECT_EQ((*update)["type"], "update");
+  EXPECT_EQ((*update)["tick"], 1);
+  EXPECT_EQ((*update)["stamp_ms"], 40);
+  ASSERT_EQ((*update)["valves"].size(), 1u);
+  EXPECT_EQ((*update)["valves"][0]["serial"], "TJV000002");
+  EXPECT_EQ((*update)["valves"][0]["position"], 11.0);
+  EXPECT_EQ((*update)["gateways"], json::array());
+  EXPECT_EQ((*update)["statuses"], json::array());
+  EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 80), std::nullopt);
+}
+
+TEST(WebUpdates, ANewValveAGatewayChangeAndATargetAppearInTheNextTick) {
+  valvectl::ValveTable table = three_valves();
+  UpdateBatcher batcher;
+  batcher.snapshot(dashboard_frame(table, {}));
+  table.on_presence(presence(4, true));
+  table.on_gateway_status(bench_status());
+  const auto update = batcher.tick(dashboard_frame(table, {{1, 90.0}}), 40);
+  ASSERT_TRUE(update);
+  ASSERT_EQ((*update)["valves"].size(), 2u);
+  EXPECT_EQ((*update)["valves"][0]["serial"], "TJV000001");
+  EXPECT_EQ((*update)["valves"][0]["target"], 90.0);
+  EXPECT_EQ((*update)["valves"][1]["serial"], "TJV000004");
+  ASSERT_EQ((*update)["gateways"].size(), 1u);
+  EXPECT_EQ((*update)["gateways"][0]["gateway"], "bench");
+}
+
+TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
+  valvectl::ValveTable table = three_valves();
+  UpdateBatcher batcher;
+  batcher.snapshot(dashboard_frame(table, {}));
+  batcher.add_status(status(1, 7, COMMAND_ACCEPTED));
+  batcher.add_status(status(1, 7, COMMAND_COMPLETED));
+  const auto update = batcher.tick(dashboard_frame(table, {}), 40);
+  ASSERT_TRUE(update);
+  ASSERT_EQ((*update)["statuses"].size(), 2u);
+  EXPECT_EQ((*update)["statuses"][0]["state"], "accepted");
+  EXPECT_EQ((*update)["statuses"][1]["state"], "completed");
+  EXPECT_EQ((*update)["statuses"][1]["command_id"], 7);
+  EXPECT_EQ((*update)["statuses"][1]["serial"], "TJV000001");
+  EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 80), std::nullopt);
+}
+
+TEST(WebTargets, AMoveSetsTheTargetUntilItsFinalStatus) {
+  CommandTracker tracker;
+  tracker.on_sent(move(1, 7, 74.6f));
+  EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
+  tracker.on_status(status(1, 7, COMMAND_ACCEPTED));
+  EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
+  tracker.on_status(status(1, 7, COMMAND_COMPLETED));
+  EXPECT_TRUE(tracker.targets().empty());
+}
+
+TEST(WebTargets, ALateStatusOfAnOlderMoveLeavesTheNewTargetAndAStopClearsIt) {
+  CommandTracker tracker;
+  tracker.on_sent(move(1, 7, 10.0f));
+  tracker.on_sent(move(1, 8, 20.0f));
+  tracker.on_status(status(1, 7, COMMAND_SUPERSEDED));
+  EXPECT_EQ(tracker.targets(), (Targets{{1, 20.0}}));
+  ValveCommand stop;
+  stop.serial(1);
+  stop.command_id(9);
+  stop.kind(COMMAND_STOP);
+  tracker.on_sent(stop);
+  EXPECT_TRUE(tracker.targets().empty());
+}
+
+}  // namespace
+}  // namespace teejet::web

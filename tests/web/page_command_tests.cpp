@@ -1,0 +1,219 @@
+// The commands teejet-web accepts from the page: checked with valvectl's rules, refused with a
+// reason, and never handed to DDS when refused.
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "page_command.hpp"
+#include "web_fixture.hpp"
+
+namespace teejet::web {
+namespace {
+
+using nlohmann::json;
+
+// Records what would have been written to DDS.
+class RecordingSender final : public CommandSender {
+ public:
+  Result<std::uint32_t> send(ValveCommand command) override {
+    if (failing) return Error{ErrorCode::kInvalidValue, "no gateway subscribes to commands"};
+    command.command_id(next_id_++);
+    sent.push_back(command);
+    return command.command_id();
+  }
+  bool failing = false;
+  std::vector<ValveCommand> sent;
+
+ private:
+  std::uint32_t next_id_ = 100;
+};
+
+const CommandPolicy kAllow{true, ""};
+
+// The reason a message is refused with, with commands allowed; "" when it was sent. Refused
+// messages must reach no valve.
+std::string refusal(std::string_view text, const CommandPolicy& policy = kAllow) {
+  RecordingSender sender;
+  const json answer = handle_page_message(text, testing::three_valves(), policy, sender);
+  if (answer["type"] == "sent") return "";
+  EXPECT_EQ(answer["type"], "refused");
+  EXPECT_TRUE(sender.sent.empty()) << text;
+  return answer["reason"].get<std::string>();
+}
+
+TEST(WebCommands, AMoveIsSentWithItsValuesAndTheAnswerNamesTheCommandId) {
+  RecordingSender sender;
+  const json answer = handle_page_message(
+      R"({"id":5,"command":"move","serial":"TJV000002","degrees":90.5,"speed_percent":80,)"
+      R"("direction":"shortest"})",
+      testing::three_valves(), kAllow, sender);
+  EXPECT_EQ(answer,
+            (json{{"type", "sent"},
+                  {"id", 5},
+                  {"commands", json::array({{{"serial", "TJV000002"}, {"command_id", 100}}})}}));
+  ASSERT_EQ(sender.sent.size(), 1u);
+  const ValveCommand& command = sender.sent[0];
+  EXPECT_EQ(command.serial(), 2u);
+  EXPECT_EQ(command.kind(), COMMAND_TARGET_DEGREES);
+  EXPECT_EQ(command.degrees(), 90.5f);
+  EXPECT_EQ(command.speed_percent(), 80);
+  EXPECT_EQ(command.direction(), DIRECTION_SHORTEST);
+}
+
+TEST(WebCommands, EveryCommandOfThePageBuildsItsValveCommand) {
+  const auto table = testing::three_valves();
+  const auto parse = [&](std::string_view text) {
+    auto command = parse_page_command(text, table);
+    EXPECT_TRUE(command) << text << ": " << (command ? "" : command.error().reason);
+    return command ? command->command : ValveCommand{};
+  };
+  EXPECT_EQ(parse(R"({"command":"stop","serial":"TJV000001"})").kind(), COMMAND_STOP);
+  EXPECT_EQ(parse(R"({"command":"clear_errors","serial":"1"})").kind(), COMMAND_CLEAR_ERRORS);
+  const ValveCommand manual =
+      parse(R"({"command":"manual","serial":"TJV000001","speed_percent":30,"direction":"close"})");
+  EXPECT_EQ(manual.kind(), COMMAND_MANUAL);
+  EXPECT_EQ(manual.speed_percent(), 30);
+  EXPECT_EQ(manual.direction(), DIRECTION_CLOSE);
+  const ValveCommand jog =
+      parse(R"({"command":"jog","serial":"TJV000001","milliseconds":65535,"speed_percent":100,)"
+            R"("direction":"open"})");
+  EXPECT_EQ(jog.kind(), COMMAND_MILLISECONDS_TO_RUN);
+  EXPECT_EQ(jog.milliseconds(), 65535);
+  EXPECT_EQ(jog.direction(), DIRECTION_OPEN);
+  const ValveCommand request = parse(
+      R"({"command":"request","serial":"TJV000001","telemetry":"run-time","resend_tenths":5})");
+  EXPECT_EQ(request.kind(), COMMAND_REQUEST);
+  EXPECT_EQ(request.telemetry(), TELEMETRY_RUN_TIME);
+  EXPECT_EQ(request.resend_tenths(), 5);
+}
+
+TEST(WebCommands, StopAllStopsEveryOnlineValveAndNoOther) {
+  RecordingSender sender;
+  const json answer =
+      handle_page_message(R"({"command":"stop_all"})", testing::three_valves(), kAllow, sender);
+  EXPECT_EQ(answer["commands"].size(), 2u);
+  ASSERT_EQ(sender.sent.size(), 2u);
+  EXPECT_EQ(sender.sent[0].serial(), 1u);
+  EXPECT_EQ(sender.sent[1].serial(), 2u);
+  EXPECT_EQ(sender.sent[1].kind(), COMMAND_STOP);
+  EXPECT_EQ(answer["id"], nullptr);
+}
+
+TEST(WebCommands, ACommandDdsDidNotTakeSaysWhy) {
+  RecordingSender sender;
+  sender.failing = true;
+  const json answer = handle_page_message(R"({"command":"stop","serial":"TJV000001"})",
+                                          testing::three_valves(), kAllow, sender);
+  EXPECT_EQ(answer["type"], "sent");
+  EXPECT_EQ(
+      answer["commands"],
+      json::array({{{"serial", "TJV000001"}, {"error", "no gateway subscribes to commands"}}}));
+}
+
+TEST(WebCommands, OutOfRangeValuesAreRefusedWithValvectlsRules) {
+  EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":360,)"
+                    R"("speed_percent":100,"direction":"open"})"),
+            "move: degrees 360 is outside 0 to 359.9");
+  EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":-0.1,)"
+                    R"("speed_percent":100,"direction":"open"})"),
+            "move: degrees -0.1 is outside 0 to 359.9");
+  EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":101,)"
+                    R"("direction":"open"})"),
+            "manual: speed_percent 101 is outside 0 to 100");
+  EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":-5,)"
+                    R"("direction":"open"})"),
+            "manual: speed_percent -5 is out of range");
+  EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":2.5,)"
+                    R"("direction":"open"})"),
+            "manual: speed_percent must be a whole number, got 2.5");
+  EXPECT_EQ(refusal(R"({"command":"jog","serial":"TJV000001","milliseconds":65536,)"
+                    R"("speed_percent":100,"direction":"open"})"),
+            "jog: milliseconds 65536 is outside 0 to 65535");
+  EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":10,)"
+                    R"("direction":"shortest"})"),
+            "manual: direction \"shortest\" is not open or close");
+  EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"version",)"
+                    R"("resend_tenths":5})"),
+            "request: version is sent once; resend_tenths must be 0");
+  EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"position",)"
+                    R"("resend_tenths":256})"),
+            "request: resend_tenths 256 is outside 0 to 255");
+  EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"pressure",)"
+                    R"("resend_tenths":0})"),
+            "request: telemetry \"pressure\" is not one of version position temperature voltage "
+            "current dps speed run-time cycle-counts");
+}
+
+TEST(WebCommands, UnknownOrInvalidSerialsAreRefused) {
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000009"})"),
+            "unknown serial TJV000009: no gateway knows it");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":1})"),
+            "serial must be a string like \"TJV000001\"");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJX1"})").substr(0, 16), "invalid serial: ");
+}
+
+TEST(WebCommands, MalformedUnknownAndIncompleteMessagesAreRefused) {
+  EXPECT_EQ(refusal(R"({"command":"stop",)"), "malformed JSON");
+  EXPECT_EQ(refusal(""), "malformed JSON");
+  EXPECT_EQ(refusal("[1,2]"), "a command must be a JSON object");
+  EXPECT_EQ(refusal(R"({"serial":"TJV000001"})"),
+            "missing \"command\": one of move, stop, stop_all, manual, jog, request, clear_errors");
+  EXPECT_EQ(refusal(R"({"command":"fly","serial":"TJV000001"})"),
+            "unknown command \"fly\": one of move, stop, stop_all, manual, jog, request, "
+            "clear_errors");
+  EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":10})"),
+            "move: missing \"speed_percent\"");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","degrees":10})"),
+            "stop: unknown field \"degrees\"");
+  EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":"10",)"
+                    R"("speed_percent":100,"direction":"open"})"),
+            "move: degrees must be a number");
+}
+
+TEST(WebCommands, AMessageOverFourKibibytesIsRefusedUnread) {
+  const std::string padding(kMaxCommandBytes, ' ');
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001"})" + padding),
+            "message of 4135 bytes is over the limit of 4096");
+  // Exactly at the limit is still read.
+  const std::string command = R"({"command":"stop","serial":"TJV000001"})";
+  EXPECT_EQ(refusal(command + std::string(kMaxCommandBytes - command.size(), ' ')), "");
+}
+
+TEST(WebCommands, AReadOnlyServerRefusesEveryCommandButEchoesItsId) {
+  RecordingSender sender;
+  const json answer =
+      handle_page_message(R"({"id":"a1","command":"stop","serial":"TJV000001"})",
+                          testing::three_valves(), CommandPolicy{false, ""}, sender);
+  EXPECT_EQ(answer, (json{{"type", "refused"},
+                          {"id", "a1"},
+                          {"reason",
+                           "commands are disabled: teejet-web runs read-only (start it "
+                           "with --allow-commands)"}}));
+  EXPECT_TRUE(sender.sent.empty());
+  EXPECT_EQ(refusal(R"({"command":"stop_all"})", CommandPolicy{false, ""}),
+            "commands are disabled: teejet-web runs read-only (start it with --allow-commands)");
+}
+
+TEST(WebCommands, WithATokenOnlyCommandsCarryingItAreSent) {
+  const CommandPolicy policy{true, "s3cret"};
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001"})", policy),
+            "missing or wrong \"token\"");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","token":"guess"})", policy),
+            "missing or wrong \"token\"");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","token":"s3cret"})", policy), "");
+  EXPECT_EQ(refusal(R"({"command":"stop",)", policy), "malformed JSON");
+  EXPECT_EQ(refusal("[]", policy), "a command must be a JSON object");
+}
+
+TEST(WebCommands, ThePolicyTellsThePageWhetherCommandsAndATokenAreNeededButNotTheToken) {
+  EXPECT_EQ(command_policy_json({}), (json{{"allowed", false}, {"token_required", false}}));
+  EXPECT_EQ(command_policy_json({true, ""}), (json{{"allowed", true}, {"token_required", false}}));
+  const json with_token = command_policy_json({true, "s3cret"});
+  EXPECT_EQ(with_token, (json{{"allowed", true}, {"token_required", true}}));
+  EXPECT_EQ(with_token.dump().find("s3cret"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace teejet::web

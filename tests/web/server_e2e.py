@@ -1,0 +1,240 @@
+#!/usr/bin/env python3
+"""teejet-web end to end (issue 13), run inside a private network namespace.
+
+A gateway with 4 simulated valves (--can sim:4) and teejet-web on one domain; a plain WebSocket
+client (web_client.py, standard library only) stands in for the page.
+
+  readonly  GET /api/valves lists the 4 valves; POST is refused (405); the WebSocket's first
+            message is the snapshot; a command is refused with the read-only reason; a WebSocket
+            from another Origin is refused.
+  commands  bad input (malformed, 360 degrees, unknown serial, over 4 KiB) is refused with its
+            reason; a move to 90 degrees reaches completed, the position follows to 90.0, the
+            target shows while it runs and is gone after; updates come at most once per 40 ms
+            tick with each valve at most once per update.
+  pages     48 pages at once get their snapshot and /api/valves still answers; the 49th is
+            refused; when one closes, a new page gets in.
+  slowpage  a page floods teejet-web with refused commands and never reads: it is dropped, and
+            meanwhile another page's move still reaches completed within the usual time.
+
+Every wait has a deadline; every failure says what differed.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+
+import web_client
+from web_client import Failure
+
+PORT = 18080
+TICK_S = 0.040
+MAX_PAGES = 48  # kMaxPages of main.cpp
+SWITCHING = "HTTP/1.1 101 Switching Protocols"
+
+
+def check(condition, message):
+    if not condition:
+        raise Failure(message)
+
+
+def WebSocket(origin=None, receive_buffer=None):  # noqa: N802 (stands for the class)
+    return web_client.WebSocket(PORT, origin, receive_buffer)
+
+
+def get(path, method="GET"):
+    return web_client.http_get(PORT, path, method)
+
+
+def wait_for_valves(web, count, deadline_s):
+    valves = web_client.valves_when(PORT, lambda listed: len(listed) >= count, deadline_s, web)
+    check(len(valves) >= count,
+          f"/api/valves listed {len(valves)} valves, not {count}, within {deadline_s} s")
+    return valves
+
+
+def readonly():
+    valves = wait_for_valves(WEB, 4, 15)
+    check([v["serial"] for v in valves] == ["TJV000001", "TJV000002", "TJV000003", "TJV000004"],
+          f"serials: {[v['serial'] for v in valves]}")
+    check(all(v["online"] for v in valves), "a valve is offline")
+    check(valves[0]["address"] == 216, f"address of TJV000001: {valves[0]['address']}")
+    status, _ = get("/api/valves", method="POST")
+    check(status == 405, f"POST /api/valves answered {status}, not 405")
+    page = WebSocket()
+    check(page.status == "HTTP/1.1 101 Switching Protocols", f"handshake: {page.status}")
+    snapshot = page.receive()
+    check(snapshot["type"] == "snapshot" and len(snapshot["valves"]) == 4, f"first: {snapshot}")
+    answer = page.answer('{"id":1,"command":"stop","serial":"TJV000001"}')
+    check(answer == {"type": "refused", "id": 1,
+                     "reason": "commands are disabled: teejet-web runs read-only (start it with "
+                               "--allow-commands)"}, f"answer: {answer}")
+    foreign = WebSocket(origin="http://example.com")
+    check(foreign.status != "HTTP/1.1 101 Switching Protocols",
+          "a WebSocket from another Origin was accepted")
+
+
+def commands():
+    wait_for_valves(WEB, 4, 15)
+    page = WebSocket()
+    page.receive()
+    move = {"command": "move", "serial": "TJV000001", "degrees": 90, "speed_percent": 100,
+            "direction": "shortest"}
+    refusals = [
+        ('{"command":"move"', "malformed JSON"),
+        (json.dumps(dict(move, degrees=360)), "move: degrees 360 is outside 0 to 359.9"),
+        (json.dumps(dict(move, serial="TJV000099")),
+         "unknown serial TJV000099: no gateway knows it"),
+        (json.dumps(dict(move, pad="x" * 5000)), "message of 5115 bytes is over the limit of 4096"),
+    ]
+    for text, reason in refusals:
+        answer = page.answer(text)
+        check(answer["type"] == "refused" and answer["reason"] == reason,
+              f"{text[:60]}: {answer}, not refused with '{reason}'")
+    answer = page.answer(json.dumps(dict(move, id=7)))
+    check(answer["type"] == "sent" and answer["id"] == 7 and len(answer["commands"]) == 1 and
+          "command_id" in answer["commands"][0], f"move: {answer}")
+    command_id = answer["commands"][0]["command_id"]
+
+    states, targets, updates = [], [], 0
+    position = None
+    start = time.monotonic()
+    while time.monotonic() - start < 30 and "completed" not in states:
+        message = page.receive()
+        if message["type"] != "update":
+            continue
+        updates += 1
+        serials = [v["serial"] for v in message["valves"]]
+        check(len(serials) == len(set(serials)), f"a valve twice in one update: {serials}")
+        states += [s["state"] for s in message["statuses"] if s["command_id"] == command_id]
+        for valve in message["valves"]:
+            if valve["serial"] == "TJV000001":
+                position = valve["position"]
+                targets.append(valve["target"])
+    elapsed = time.monotonic() - start
+    check(states == ["accepted", "completed"], f"statuses: {states}")
+    # The gateway completes a move within its tolerance (1.0 degree by default); the simulated
+    # valve then comes to rest on its target, and the page must see that too.
+    check(position is not None and abs(position - 90.0) <= 1.0,
+          f"position at completed: {position}")
+    end = time.monotonic() + 5
+    while position != 90.0 and time.monotonic() < end:
+        message = page.receive()
+        for valve in message.get("valves", []) if message["type"] == "update" else []:
+            if valve["serial"] == "TJV000001":
+                position = valve["position"]
+    check(position == 90.0, f"position 5 s after completed: {position}")
+    check(90.0 in targets and targets[-1] is None, f"targets shown: {targets}")
+    limit = int(elapsed / TICK_S) + 2
+    check(updates <= limit, f"{updates} updates in {elapsed:.2f} s: more than one per tick")
+    print(f"move completed in {elapsed:.2f} s with {updates} updates")
+
+
+def pages():
+    wait_for_valves(WEB, 4, 15)
+    open_pages = []
+    for n in range(MAX_PAGES):
+        page = WebSocket()
+        check(page.status == SWITCHING, f"page {n + 1} of {MAX_PAGES}: {page.status!r}")
+        open_pages.append(page)
+    for n, page in enumerate(open_pages):
+        first = page.receive()
+        check(first["type"] == "snapshot", f"page {n + 1}: first message {first}")
+    status, body = get("/api/valves")
+    check(status == 200 and len(json.loads(body)) == 4,
+          f"/api/valves with {MAX_PAGES} pages open: {status} {body[:80]}")
+    extra = WebSocket()
+    check(extra.status != SWITCHING, f"page {MAX_PAGES + 1} was accepted")
+    extra.sock.close()
+    open_pages.pop().sock.close()
+    # The server notices the closed page on its own thread: try again until it has.
+    end = time.monotonic() + 5
+    while True:
+        page = WebSocket()
+        if page.status == SWITCHING:
+            break
+        page.sock.close()
+        check(time.monotonic() < end, f"no new page within 5 s after one closed: {page.status!r}")
+        time.sleep(0.05)
+    check(page.receive()["type"] == "snapshot", "the page that got in had no snapshot")
+    print(f"{MAX_PAGES} pages served, the next refused ({extra.status!r}), a free place reused")
+
+
+def move_completes(page, serial, degrees, seconds):
+    answer = page.answer(json.dumps({"id": 1, "command": "move", "serial": serial,
+                                     "degrees": degrees, "speed_percent": 100,
+                                     "direction": "shortest"}))
+    check(answer["type"] == "sent" and "command_id" in answer["commands"][0], f"move: {answer}")
+    command_id = answer["commands"][0]["command_id"]
+    states = []
+    end = time.monotonic() + seconds
+    while "completed" not in states:
+        check(time.monotonic() < end, f"move of {serial} not completed within {seconds} s: "
+                                      f"statuses {states}")
+        message = page.receive()
+        if message["type"] == "update":
+            states += [s["state"] for s in message["statuses"] if s["command_id"] == command_id]
+    check(states == ["accepted", "completed"], f"statuses: {states}")
+
+
+def slowpage():
+    wait_for_valves(WEB, 4, 15)
+    slow = WebSocket(receive_buffer=4096)
+    check(slow.receive()["type"] == "snapshot", "the slow page had no snapshot")
+    # Each refusal is an answer the slow page never reads: enough of them fill every socket
+    # buffer between the two, and then its outbox. Sent from a thread: without the fix the
+    # server stops reading, and this would block.
+    flood = web_client.WebSocket.frame('{"command":"stop","serial":"TJV000099"}') * 100000
+    threading.Thread(target=slow.sock.sendall, args=(flood,), daemon=True).start()
+    end = time.monotonic() + 15
+    while "a page stopped reading" not in open(WEB_LOG).read():
+        check(time.monotonic() < end, "the page that does not read was not dropped within 15 s")
+        time.sleep(0.05)
+    page = WebSocket()
+    check(page.receive()["type"] == "snapshot", "the second page had no snapshot")
+    move_completes(page, "TJV000001", 90, 10)
+    slow.sock.close()
+    print("the page that did not read was dropped; the other page's move completed")
+
+
+def main():
+    global WEB, WEB_LOG
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--gateway", required=True)
+    parser.add_argument("--web", required=True)
+    parser.add_argument("case", choices=["readonly", "commands", "pages", "slowpage"])
+    args = parser.parse_args()
+    work = tempfile.mkdtemp(prefix="teejet-web-e2e-")
+    gateway_log = open(os.path.join(work, "gateway.log"), "w")
+    web_log_path = WEB_LOG = os.path.join(work, "web.log")
+    web_args = [args.web, "--listen", f"127.0.0.1:{PORT}"]
+    if args.case in ("commands", "slowpage"):
+        web_args.append("--allow-commands")
+    gateway = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
+                               stderr=subprocess.STDOUT)
+    WEB = subprocess.Popen(web_args, stdout=open(web_log_path, "w"), stderr=subprocess.STDOUT)
+    try:
+        {"readonly": readonly, "commands": commands, "pages": pages,
+         "slowpage": slowpage}[args.case]()
+    except Failure as failure:
+        print(f"FAIL: {failure}")
+        print(open(web_log_path).read())
+        return 1
+    finally:
+        for proc in (WEB, gateway):
+            proc.terminate()
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+    check(WEB.returncode == 0, f"teejet-web exited {WEB.returncode} after SIGTERM")
+    print("PASS")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,108 @@
+"""A WebSocket and HTTP client of teejet-web for the tests, standard library only: it stands in
+for the page (tests/web/server_e2e.py, tests/security/roles_test.py)."""
+
+import base64
+import json
+import os
+import socket
+import struct
+import time
+import urllib.error
+import urllib.request
+
+
+class Failure(Exception):
+    pass
+
+
+class WebSocket:
+    def __init__(self, port, origin=None, receive_buffer=None):
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.settimeout(10)
+        if receive_buffer:
+            # Before connecting: the window the server may fill stays this small.
+            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, receive_buffer)
+        self.sock.connect(("127.0.0.1", port))
+        key = base64.b64encode(os.urandom(16)).decode()
+        request = (f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+                   "Sec-WebSocket-Version: 13\r\n")
+        if origin:
+            request += f"Origin: {origin}\r\n"
+        self.sock.sendall((request + "\r\n").encode())
+        head = b""
+        while b"\r\n\r\n" not in head:
+            chunk = self.sock.recv(1)
+            if not chunk:
+                break
+            head += chunk
+        self.status = head.split(b"\r\n")[0].decode()
+
+    def _exact(self, n):
+        data = b""
+        while len(data) < n:
+            try:
+                chunk = self.sock.recv(n - len(data))
+            except socket.timeout:
+                raise Failure("no message from teejet-web within 10 s") from None
+            if not chunk:
+                raise Failure("the server closed the WebSocket")
+            data += chunk
+        return data
+
+    def receive(self):
+        head = self._exact(2)
+        length = head[1] & 0x7F
+        if length == 126:
+            length = struct.unpack(">H", self._exact(2))[0]
+        elif length == 127:
+            length = struct.unpack(">Q", self._exact(8))[0]
+        return json.loads(self._exact(length).decode())
+
+    @staticmethod
+    def frame(text):
+        data = text.encode()
+        mask = os.urandom(4)
+        n = len(data)
+        if n < 126:
+            head = bytes([0x81, 0x80 | n])
+        else:
+            head = bytes([0x81, 0x80 | 126]) + struct.pack(">H", n)
+        return head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(data))
+
+    def send(self, text):
+        self.sock.sendall(self.frame(text))
+
+    def answer(self, text):
+        """Sends `text` and returns the answer, skipping the updates in between."""
+        self.send(text)
+        while True:
+            message = self.receive()
+            if message["type"] in ("sent", "refused"):
+                return message
+
+
+def http_get(port, path, method="GET"):
+    request = urllib.request.Request(f"http://127.0.0.1:{port}{path}", method=method)
+    try:
+        with urllib.request.urlopen(request, timeout=5) as response:
+            return response.status, response.read().decode()
+    except urllib.error.HTTPError as error:
+        return error.code, ""
+
+
+def valves_when(port, until, deadline_s, process=None):
+    """GET /api/valves until `until(listing)` holds or `deadline_s` passes: the last listing
+    (empty while the server does not answer yet). Fails at once when `process` exited."""
+    end = time.monotonic() + deadline_s
+    while True:
+        if process is not None and process.poll() is not None:
+            raise Failure(f"teejet-web exited {process.returncode}")
+        try:
+            status, body = http_get(port, "/api/valves")
+            valves = json.loads(body) if status == 200 else []
+        except OSError:  # not listening yet
+            valves = []
+        if until(valves) or time.monotonic() >= end:
+            return valves
+        time.sleep(0.05)

@@ -1,0 +1,126 @@
+#include "dashboard_json.hpp"
+
+#include "render.hpp"
+#include "teejet/dds/names.hpp"
+
+namespace teejet::web {
+namespace {
+
+nlohmann::json reply_value(const valvectl::ValveTable& table, std::uint32_t serial,
+                           Telemetry telemetry, const char* field) {
+  const auto reply = table.reply(serial, valvectl::reply_name(telemetry));
+  if (!reply || !reply->values.contains(field)) return nullptr;
+  return reply->values.at(field);
+}
+
+}  // namespace
+
+nlohmann::json valve_json(const valvectl::ValveTable& table, const valvectl::ValveRow& row,
+                          const Targets& targets) {
+  nlohmann::json json = valvectl::to_json(row);
+  const auto target = targets.find(row.serial);
+  json["target"] =
+      target == targets.end() ? nlohmann::json(nullptr) : nlohmann::json(target->second);
+  json["amps"] = reply_value(table, row.serial, TELEMETRY_CURRENT, "amps");
+  json["speed_percent"] =
+      reply_value(table, row.serial, TELEMETRY_SPEED_DIRECTION, "speed_percent");
+  json["direction"] = reply_value(table, row.serial, TELEMETRY_SPEED_DIRECTION, "direction");
+  return json;
+}
+
+nlohmann::json valves_json(const valvectl::ValveTable& table, const Targets& targets) {
+  nlohmann::json array = nlohmann::json::array();
+  for (const valvectl::ValveRow& row : table.rows())
+    array.push_back(valve_json(table, row, targets));
+  return array;
+}
+
+nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway) {
+  return {
+      {"gateway", gateway.name},
+      {"can_interface", gateway.can_interface},
+      {"bus_state", std::string(dds::to_string(gateway.bus_state))},
+      {"tx_errors", gateway.tx_errors},
+      {"rx_errors", gateway.rx_errors},
+      {"frames_in", gateway.frames_in},
+      {"frames_out", gateway.frames_out},
+      {"decode_errors", gateway.decode_errors},
+      {"rx_dropped", gateway.rx_dropped},
+      {"valves_online", gateway.valves_online},
+      {"valves_known", gateway.valves_known},
+  };
+}
+
+nlohmann::json gateways_json(const valvectl::ValveTable& table) {
+  nlohmann::json array = nlohmann::json::array();
+  for (const valvectl::GatewaySummary& gateway : table.gateways()) {
+    array.push_back(gateway_json(gateway));
+  }
+  return array;
+}
+
+DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets) {
+  DashboardFrame frame;
+  for (const valvectl::ValveRow& row : table.rows()) {
+    frame.valves.emplace_back(row.serial, valve_json(table, row, targets));
+  }
+  for (const valvectl::GatewaySummary& gateway : table.gateways()) {
+    frame.gateways.emplace_back(gateway.name, gateway_json(gateway));
+  }
+  return frame;
+}
+
+nlohmann::json UpdateBatcher::snapshot(const DashboardFrame& frame) {
+  sent_valves_.clear();
+  sent_gateways_.clear();
+  statuses_.clear();
+  nlohmann::json valves = nlohmann::json::array();
+  for (const auto& [serial, json] : frame.valves) valves.push_back(sent_valves_[serial] = json);
+  nlohmann::json gateways = nlohmann::json::array();
+  for (const auto& [name, json] : frame.gateways) gateways.push_back(sent_gateways_[name] = json);
+  return {{"type", "snapshot"}, {"valves", valves}, {"gateways", gateways}};
+}
+
+void UpdateBatcher::add_status(const CommandStatus& status) {
+  statuses_.push_back(valvectl::status_json(status));
+}
+
+std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
+                                                  std::uint64_t stamp_ms) {
+  nlohmann::json valves = nlohmann::json::array();
+  for (const auto& [serial, json] : frame.valves) {
+    nlohmann::json& sent = sent_valves_[serial];
+    if (json != sent) valves.push_back(sent = json);
+  }
+  nlohmann::json gateways = nlohmann::json::array();
+  for (const auto& [name, json] : frame.gateways) {
+    nlohmann::json& sent = sent_gateways_[name];
+    if (json != sent) gateways.push_back(sent = json);
+  }
+  if (valves.empty() && gateways.empty() && statuses_.empty()) return std::nullopt;
+  nlohmann::json statuses(std::move(statuses_));
+  statuses_.clear();
+  return nlohmann::json{{"type", "update"}, {"tick", ++ticks_},     {"stamp_ms", stamp_ms},
+                        {"valves", valves}, {"gateways", gateways}, {"statuses", statuses}};
+}
+
+void CommandTracker::on_sent(const ValveCommand& command) {
+  if (command.kind() == COMMAND_TARGET_DEGREES) {
+    // The wire's float, at its 0.1 degree grid, as positions are shown.
+    targets_[command.serial()] = valvectl::at_resolution(command.degrees(), 10);
+    running_[command.serial()] = command.command_id();
+  } else {
+    targets_.erase(command.serial());
+    running_.erase(command.serial());
+  }
+}
+
+void CommandTracker::on_status(const CommandStatus& status) {
+  if (status.state() == COMMAND_ACCEPTED) return;
+  const auto running = running_.find(status.serial());
+  if (running == running_.end() || running->second != status.command_id()) return;
+  running_.erase(running);
+  targets_.erase(status.serial());
+}
+
+}  // namespace teejet::web

@@ -1,0 +1,83 @@
+#pragma once
+
+// The JSON teejet-web sends: the valve table (GET /api/valves and the page's first message),
+// gateway health, and one batched update per tick. Pure functions of valvectl's ValveTable, so
+// the page shows exactly what `valvectl list` and `watch` would, and the tests pin the format.
+// docs/web.md describes every message.
+
+#include <cstdint>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "teejet/valve.h"
+#include "valve_table.hpp"
+
+namespace teejet::web {
+
+// The target, in degrees, of the running Target Degrees command per valve, by serial: only what
+// teejet-web itself sent (see CommandTracker), since statuses of other senders are not followed.
+using Targets = std::map<std::uint32_t, double>;
+
+// valvectl's row (serial, address, online, boot_mode, position, temperature_c, volts, errors,
+// gateway) with what the dashboard adds: "target" of the running command, "amps" and
+// "speed_percent"/"direction" from the latest current and speed replies; null when unknown.
+nlohmann::json valve_json(const valvectl::ValveTable& table, const valvectl::ValveRow& row,
+                          const Targets& targets);
+// Every valve, by serial: the body of GET /api/valves.
+nlohmann::json valves_json(const valvectl::ValveTable& table, const Targets& targets);
+
+// {"gateway":"bench","can_interface":"can0","bus_state":"error_active","tx_errors":0,
+//  "rx_errors":0,"frames_in":10,"frames_out":4,"decode_errors":0,"rx_dropped":0,
+//  "valves_online":4,"valves_known":4}
+nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway);
+nlohmann::json gateways_json(const valvectl::ValveTable& table);
+
+// Collects what changed between ticks and makes one message of it, so that the page gets 20-30
+// messages a second however many samples arrive. A tick compares each valve's and gateway's JSON
+// with what the page was last sent: a valve that moved twice between ticks is sent once, with
+// its latest state. Command statuses are events, not state: every one is kept until the tick.
+// Every valve's and gateway's JSON at one instant, in the table's order: made once per tick and
+// compared by each page's batcher, so that more pages do not mean more JSON to build.
+struct DashboardFrame {
+  std::vector<std::pair<std::uint32_t, nlohmann::json>> valves;
+  std::vector<std::pair<std::string, nlohmann::json>> gateways;
+};
+DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets);
+
+class UpdateBatcher {
+ public:
+  // The first message of a page: {"type":"snapshot","valves":[...],"gateways":[...]}. What it
+  // holds counts as sent, so the next tick only carries changes.
+  nlohmann::json snapshot(const DashboardFrame& frame);
+
+  void add_status(const CommandStatus& status);
+
+  // {"type":"update","tick":N,"stamp_ms":..,"valves":[changed],"gateways":[changed],
+  //  "statuses":[since the last tick]}, or nullopt when nothing changed (nothing to send).
+  // `stamp_ms` is the caller's clock, so that the page can plot against it.
+  std::optional<nlohmann::json> tick(const DashboardFrame& frame, std::uint64_t stamp_ms);
+
+ private:
+  std::map<std::uint32_t, nlohmann::json> sent_valves_;
+  std::map<std::string, nlohmann::json> sent_gateways_;
+  std::vector<nlohmann::json> statuses_;
+  std::uint64_t ticks_ = 0;
+};
+
+// Follows the commands teejet-web sent, for the "target" of each valve: a Target Degrees
+// command sets it, any other command to the valve or a final status of the move clears it.
+class CommandTracker {
+ public:
+  void on_sent(const ValveCommand& command);  // serial and command_id set
+  void on_status(const CommandStatus& status);
+  const Targets& targets() const { return targets_; }
+
+ private:
+  Targets targets_;
+  std::map<std::uint32_t, std::uint32_t> running_;  // command_id of each target, by serial
+};
+
+}  // namespace teejet::web

@@ -1,0 +1,63 @@
+#pragma once
+
+// The commands the page may send over its WebSocket, parsed and checked before anything reaches
+// DDS. The range rules are valvectl's (valvectl::checked_command, which encodes as the gateway
+// will); the valve must be in the table. handle_page_message() either hands every command to a
+// CommandSender or refuses with a reason and sends nothing, so a test with a recording sender
+// proves that bad input never reaches a valve. docs/web.md lists the messages.
+
+#include <cstddef>
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "teejet/core/result.hpp"
+#include "teejet/valve.h"
+#include "valve_table.hpp"
+
+namespace teejet::web {
+
+// Larger messages are refused unread: no command needs more than a few hundred bytes.
+inline constexpr std::size_t kMaxCommandBytes = 4096;
+
+// A checked command: what to write, to which valves (several for stop_all).
+struct PageCommand {
+  std::vector<std::uint32_t> serials;
+  ValveCommand command;  // serial, command_id and origin are set per send
+};
+
+// {"command":"move","serial":"TJV000001","degrees":90,"speed_percent":100,"direction":"open"}
+// and the others of docs/web.md; an Error names what was wrong.
+Result<PageCommand> parse_page_command(std::string_view text, const valvectl::ValveTable& table);
+// The same for a message already parsed (discarded when it was not JSON).
+Result<PageCommand> check_page_command(const nlohmann::json& message,
+                                       const valvectl::ValveTable& table);
+
+// Where checked commands go: CommandClient in teejet-web, a recorder in the tests.
+class CommandSender {
+ public:
+  virtual ~CommandSender() = default;
+  // The command_id the command was written with, or an Error saying why it was not written.
+  virtual Result<std::uint32_t> send(ValveCommand command) = 0;
+};
+
+struct CommandPolicy {
+  bool allow_commands = false;  // --allow-commands; read-only otherwise
+  std::string token;            // --token: when set, every command must carry it
+};
+
+// What the page's snapshot says of commands, so that a read-only page builds no controls and a
+// page that needs a token asks for one: {"allowed":true,"token_required":false}. Never the token.
+nlohmann::json command_policy_json(const CommandPolicy& policy);
+
+// The answer to one message from the page:
+// {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did
+// not take has "error":"why" instead of "command_id") or
+// {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" (null without).
+nlohmann::json handle_page_message(std::string_view text, const valvectl::ValveTable& table,
+                                   const CommandPolicy& policy, CommandSender& sender);
+
+}  // namespace teejet::web

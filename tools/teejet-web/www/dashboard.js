@@ -1,0 +1,390 @@
+"use strict";
+// The teejet-web page: one WebSocket (/ws, messages in docs/web.md), one card per valve, a plot,
+// gateway health and, only when the server's snapshot allows them, command controls. In
+// read-only mode the controls are never built, so that no click can even try.
+(function () {
+  const SVG = "http://www.w3.org/2000/svg";
+  const HISTORY_MS = 5 * 60 * 1000 + 10000;  // the longest plot window, and a little
+  const COLORS = ["#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f", "#5d4037",
+                  "#ad1457", "#827717", "#37474f"];
+  const UNITS = { position: "position (°)", amps: "current (A)", volts: "voltage (V)",
+                  temperature_c: "temperature (°C)" };
+  const FINAL = new Set(["completed", "rejected", "timed_out", "superseded", "refused", "error"]);
+
+  const valves = new Map();    // serial -> {data, card, history: [[t, json]], color}
+  const gateways = new Map();  // name -> element
+  const sentCommands = new Map();  // request id -> serials it was for (until answered)
+  let policy = null;           // {allowed, token_required} from the snapshot
+  let socket = null;
+  let nextId = 1;
+  let retryMs = 500;
+  let plotDirty = true;
+  let framePending = false;
+  // The server's clock minus this browser's, from the latest update: the plot's "now" keeps
+  // moving in the server's time while no valve changes (the server then sends nothing).
+  let serverOffsetMs = null;
+
+  // Read by the benchmark (bench/): how many updates reach the page and how often it paints.
+  const stats = { messages: 0, updates_per_s: 0, valve_updates: 0, valve_updates_per_s: 0,
+                  last_message_ms: null, frames_painted: 0 };
+  const recent = [];  // [performance.now(), valves in the message] of the last 5 s
+  window.teejetDashboard = { stats };
+
+  const $ = (id) => document.getElementById(id);
+  const plot = new window.TeejetPlot($("plot"), $("plot-legend"));
+
+  function el(tag, attrs, ...children) {
+    const node = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs || {})) {
+      if (k === "class") node.className = v; else node.setAttribute(k, v);
+    }
+    node.append(...children);
+    return node;
+  }
+
+  function svg(tag, attrs) {
+    const node = document.createElementNS(SVG, tag);
+    for (const [k, v] of Object.entries(attrs)) node.setAttribute(k, v);
+    return node;
+  }
+
+  const dash = "—";
+  const fixed = (v, digits, unit) => (v === null || v === undefined ? dash
+                                      : `${Number(v).toFixed(digits)}${unit}`);
+
+  // ---- connection ----------------------------------------------------------------------------
+
+  function setConnection(state, text) {
+    const badge = $("connection");
+    badge.dataset.state = state;
+    badge.textContent = text;
+  }
+
+  function connect() {
+    setConnection(socket ? "reconnecting" : "connecting", "connecting…");
+    const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+    socket = ws;
+    ws.onopen = () => { retryMs = 500; setConnection("connected", "connected"); };
+    ws.onmessage = (event) => onMessage(JSON.parse(event.data));
+    ws.onclose = () => {
+      if (socket !== ws) return;
+      // Back off, so that a restarting server is not hammered by every open page.
+      const wait = retryMs;
+      retryMs = Math.min(retryMs * 2, 10000);
+      setConnection("reconnecting", `reconnecting in ${(wait / 1000).toFixed(1)} s`);
+      setTimeout(connect, wait);
+    };
+  }
+
+  function onMessage(message) {
+    const now = performance.now();
+    stats.messages += 1;
+    stats.last_message_ms = Date.now();
+    if (message.type === "snapshot") {
+      onSnapshot(message);
+    } else if (message.type === "update") {
+      stats.valve_updates += message.valves.length;
+      recent.push([now, message.valves.length]);
+      updateRates(now);
+      serverOffsetMs = message.stamp_ms - Date.now();
+      for (const v of message.valves) showValve(v, message.stamp_ms);
+      for (const g of message.gateways) showGateway(g);
+      for (const s of message.statuses) showStatus(s);
+    } else if (message.type === "sent") {
+      onSent(message);
+    } else if (message.type === "refused") {
+      onRefused(message);
+    }
+  }
+
+  function updateRates(now) {
+    while (recent.length && recent[0][0] < now - 5000) recent.shift();
+    stats.updates_per_s = recent.length / 5;
+    stats.valve_updates_per_s = recent.reduce((sum, r) => sum + r[1], 0) / 5;
+  }
+  setInterval(() => updateRates(performance.now()), 1000);
+
+  function onSnapshot(message) {
+    const next = message.commands || { allowed: false, token_required: false };
+    if (!policy || policy.allowed !== next.allowed || policy.token_required !== next.token_required) {
+      // Another server (or another mode) behind the same address: rebuild every control.
+      policy = next;
+      for (const v of valves.values()) v.card.remove();
+      valves.clear();
+      buildGlobalControls();
+    }
+    $("mode").textContent = policy.allowed
+      ? (policy.token_required ? "commands allowed (token)" : "commands allowed") : "read-only";
+    const stamp = Date.now();
+    for (const v of message.valves) showValve(v, stamp);
+    for (const g of message.gateways) showGateway(g);
+  }
+
+  // ---- valves --------------------------------------------------------------------------------
+
+  function showValve(data, stampMs) {
+    let valve = valves.get(data.serial);
+    if (!valve) {
+      valve = { data, history: [], color: COLORS[valves.size % COLORS.length] };
+      valve.card = buildCard(data.serial, valve);
+      valves.set(data.serial, valve);
+      placeCard(valve.card);
+    }
+    valve.data = data;
+    valve.history.push([stampMs, data]);
+    while (valve.history.length && valve.history[0][0] < stampMs - HISTORY_MS) valve.history.shift();
+    fillCard(valve);
+    if (valve.card.querySelector(".plot-pick").checked) requestPaint();
+  }
+
+  // Sorted by serial: a new valve takes its place among the others.
+  function placeCard(card) {
+    const cards = $("cards");
+    const after = [...cards.children].find((c) => c.dataset.serial > card.dataset.serial);
+    cards.insertBefore(card, after || null);
+  }
+
+  function buildCard(serial, valve) {
+    const dial = svg("svg", { class: "dial", viewBox: "-60 -60 120 120", role: "img" });
+    dial.append(svg("circle", { class: "face", r: 54 }));
+    for (let d = 0; d < 360; d += 30) {
+      dial.append(svg("line", { class: "tick", x1: 0, y1: -54, x2: 0, y2: d % 90 ? -49 : -44,
+                                transform: `rotate(${d})` }));
+    }
+    dial.append(svg("line", { class: "target", x1: 0, y1: -30, x2: 0, y2: -54, visibility: "hidden" }));
+    dial.append(svg("line", { class: "needle", x1: 0, y1: 8, x2: 0, y2: -46 }));
+    dial.append(svg("circle", { class: "hub", r: 4 }));
+
+    const pick = el("input", { type: "checkbox", class: "plot-pick" });
+    pick.checked = valves.size < 4;  // the first few are plotted until the operator chooses
+    pick.addEventListener("change", requestPaint);
+    const readings = el("dl", { class: "readings" });
+    for (const [key, label] of [["temperature", "temperature"], ["voltage", "voltage"],
+                                ["current", "current"], ["speed", "speed"],
+                                ["direction", "direction"], ["target", "target"]]) {
+      readings.append(el("dt", {}, label), el("dd", { class: key }, dash));
+    }
+    const card = el("article", { class: "card", "data-serial": serial },
+      el("header", {}, el("h2", {}, serial), el("label", { class: "hint" }, pick, " plot")),
+      el("div", { class: "meta" }),
+      el("div", { class: "dial-row" }, dial,
+         el("div", {}, el("div", { class: "position" }, dash), readings)),
+      el("div", { class: "errors" }, el("ul", { class: "error-list" })));
+    card.querySelector(".position").style.color = valve.color;
+    if (policy.allowed) card.append(buildCommands(serial));
+    card.append(el("div", { class: "command-status" }));
+    return card;
+  }
+
+  function fillCard(valve) {
+    const d = valve.data, card = valve.card;
+    card.dataset.online = String(d.online);
+    const online = el("span", { class: "online-state", "data-online": String(d.online) },
+                      d.online ? "online" : "offline");
+    card.querySelector(".meta").replaceChildren(
+      `address ${d.address} · gateway ${d.gateway || dash} · `, online,
+      d.boot_mode ? " · boot mode" : "");
+    card.querySelector(".position").textContent = fixed(d.position, 1, "°");
+    const needle = card.querySelector(".needle");
+    if (d.position === null) {
+      needle.setAttribute("visibility", "hidden");
+      needle.removeAttribute("data-degrees");
+    } else {
+      needle.setAttribute("visibility", "visible");
+      needle.setAttribute("transform", `rotate(${d.position})`);
+      needle.dataset.degrees = String(d.position);
+    }
+    const target = card.querySelector(".target");
+    if (d.target === null || d.target === undefined) {
+      target.setAttribute("visibility", "hidden");
+      target.removeAttribute("data-degrees");
+    } else {
+      target.setAttribute("visibility", "visible");
+      target.setAttribute("transform", `rotate(${d.target})`);
+      target.dataset.degrees = String(d.target);
+    }
+    const set = (cls, text) => { card.querySelector(`dd.${cls}`).textContent = text; };
+    set("temperature", fixed(d.temperature_c, 0, " °C"));
+    set("voltage", fixed(d.volts, 1, " V"));
+    set("current", fixed(d.amps, 2, " A"));
+    set("speed", fixed(d.speed_percent, 0, " %"));
+    set("direction", d.direction || dash);
+    set("target", fixed(d.target, 1, "°"));
+    const errors = d.errors || [];
+    card.querySelector(".error-list").replaceChildren(...errors.map((e) => el("li", {}, e)));
+    const clear = card.querySelector(".clear-errors");
+    if (clear) clear.disabled = errors.length === 0;
+  }
+
+  // ---- commands (built only when the snapshot allows them) -----------------------------------
+
+  function buildGlobalControls() {
+    const box = $("global-commands");
+    box.replaceChildren();
+    if (!policy.allowed) return;
+    if (policy.token_required) {
+      box.append(el("label", {}, "token ",
+                    el("input", { id: "token", class: "cmd", type: "password", size: 12 })));
+    }
+    const stopAll = el("button", { id: "stop-all", class: "cmd danger", type: "button" }, "Stop all");
+    stopAll.addEventListener("click", () => send({ command: "stop_all" }, null));
+    box.append(stopAll);
+  }
+
+  function number(attrs) { return el("input", Object.assign({ type: "number", class: "cmd" }, attrs)); }
+
+  function options(cls, values) {
+    return el("select", { class: `cmd ${cls}` }, ...values.map((v) => el("option", { value: v }, v)));
+  }
+
+  function form(cls, onSubmit, ...children) {
+    const f = el("form", { class: `cmd ${cls}` }, ...children);
+    f.addEventListener("submit", (event) => { event.preventDefault(); onSubmit(f); });
+    return f;
+  }
+
+  function buildCommands(serial) {
+    const value = (f, cls) => f.querySelector(`.${cls}`).value;
+    const move = form("move", (f) => send({
+      command: "move", serial, degrees: Number(value(f, "move-degrees")),
+      speed_percent: Number(value(f, "move-speed")), direction: value(f, "move-direction") }, serial),
+      "move", number({ class: "cmd move-degrees", min: 0, max: 359.9, step: 0.1, value: 0,
+                          title: "degrees" }), "°",
+      number({ class: "cmd move-speed", min: 0, max: 100, value: 100, title: "speed %" }), "%",
+      options("move-direction", ["shortest", "open", "close"]),
+      el("button", { class: "cmd move-send", type: "submit" }, "Move"));
+    const stop = el("button", { class: "cmd stop", type: "button" }, "Stop");
+    stop.addEventListener("click", () => send({ command: "stop", serial }, serial));
+    const clear = el("button", { class: "cmd clear-errors", type: "button" }, "Clear Errors");
+    clear.addEventListener("click", () => send({ command: "clear_errors", serial }, serial));
+    const jog = form("jog", (f) => send({
+      command: "jog", serial, milliseconds: Number(value(f, "jog-ms")),
+      speed_percent: Number(value(f, "jog-speed")), direction: value(f, "jog-direction") }, serial),
+      "jog", number({ class: "cmd jog-ms", min: 0, max: 65535, value: 200, title: "ms" }), "ms at",
+      number({ class: "cmd jog-speed", min: 0, max: 100, value: 50, title: "speed %" }), "%",
+      options("jog-direction", ["open", "close"]),
+      el("button", { class: "cmd jog-send", type: "submit" }, "Jog"));
+    const request = form("request", (f) => {
+      const telemetry = value(f, "request-telemetry");
+      send({ command: "request", serial, telemetry,
+             resend_tenths: 0 }, serial);
+    }, "request", options("request-telemetry", ["current", "speed", "position", "temperature",
+                                                "voltage", "dps", "run-time", "cycle-counts",
+                                                "version"]),
+      el("button", { class: "cmd request-send", type: "submit" }, "Request"));
+    return el("div", { class: "commands cmd" }, move, el("div", {}, stop, " ", clear), jog, request);
+  }
+
+  function send(command, serial) {
+    const id = nextId++;
+    const message = Object.assign({ id }, command);
+    const token = $("token");
+    if (token) message.token = token.value;
+    if (!socket || socket.readyState !== WebSocket.OPEN) {
+      notice(`${command.command}: not connected to teejet-web`);
+      return;
+    }
+    sentCommands.set(id, serial);
+    if (serial) setStatus(serial, "sent", `${command.command}: sent…`);
+    socket.send(JSON.stringify(message));
+  }
+
+  function onSent(message) {
+    sentCommands.delete(message.id);
+    for (const c of message.commands) {
+      if (c.error) setStatus(c.serial, "error", `not sent: ${c.error}`);
+      else setStatus(c.serial, "sent", `#${c.command_id}: sent, waiting for the gateway`);
+    }
+  }
+
+  function onRefused(message) {
+    const serial = sentCommands.get(message.id);
+    sentCommands.delete(message.id);
+    if (serial) setStatus(serial, "refused", `refused: ${message.reason}`);
+    notice(`refused: ${message.reason}`);
+  }
+
+  function showStatus(status) {
+    const reason = status.reason ? ` (${status.reason})` : "";
+    setStatus(status.serial, status.state,
+              `${status.kind} #${status.command_id}: ${status.state}${reason}`);
+  }
+
+  function setStatus(serial, state, text) {
+    const valve = valves.get(serial);
+    if (!valve) return;
+    const line = valve.card.querySelector(".command-status");
+    line.dataset.state = state;
+    line.dataset.final = String(FINAL.has(state));
+    line.textContent = text;
+  }
+
+  function notice(text) {
+    const box = $("notices");
+    box.replaceChildren(el("div", {}, text), ...[...box.children].slice(0, 2));
+  }
+
+  // ---- gateways ------------------------------------------------------------------------------
+
+  function showGateway(g) {
+    let panel = gateways.get(g.gateway);
+    if (!panel) {
+      $("gateway-list").querySelector(".empty")?.remove();
+      panel = el("div", { class: "gateway", "data-gateway": g.gateway });
+      gateways.set(g.gateway, panel);
+      const list = $("gateway-list");
+      const after = [...list.children].find((c) => c.dataset.gateway > g.gateway);
+      list.insertBefore(panel, after || null);
+    }
+    const row = (label, value, attrs) => el("tr", {}, el("td", {}, label),
+                                            el("td", attrs || {}, String(value)));
+    panel.replaceChildren(
+      el("h3", { class: "hint" }, `${g.gateway} on ${g.can_interface}`),
+      el("table", {},
+         row("bus state", g.bus_state, { class: "bus-state", "data-state": g.bus_state }),
+         row("tx / rx errors", `${g.tx_errors} / ${g.rx_errors}`),
+         row("frames in / out", `${g.frames_in} / ${g.frames_out}`),
+         row("decode errors", g.decode_errors),
+         row("dropped", g.rx_dropped),
+         row("valves online / known", `${g.valves_online} / ${g.valves_known}`)));
+  }
+
+  // ---- plot ----------------------------------------------------------------------------------
+
+  // At most one paint per animation frame, and besides the once-a-second tick of the time axis,
+  // none while no new data came.
+  function requestPaint() {
+    plotDirty = true;
+    if (framePending) return;
+    framePending = true;
+    requestAnimationFrame(paint);
+  }
+
+  function paint() {
+    framePending = false;
+    if (!plotDirty) return;
+    plotDirty = false;
+    const field = $("plot-field").value;
+    const windowS = Number($("plot-window").value);
+    let nowMs = 0;
+    const series = [];
+    for (const [serial, valve] of [...valves.entries()].sort((a, b) => (a[0] < b[0] ? -1 : 1))) {
+      if (valve.history.length) nowMs = Math.max(nowMs, valve.history[valve.history.length - 1][0]);
+      if (!valve.card.querySelector(".plot-pick").checked) continue;
+      series.push({ label: serial, color: valve.color,
+                    points: valve.history.map(([t, d]) => [t, d[field] ?? null]) });
+    }
+    if (serverOffsetMs !== null) nowMs = Math.max(nowMs, Date.now() + serverOffsetMs);
+    plot.draw(series, nowMs || Date.now(), windowS, UNITS[field]);
+    stats.frames_painted += 1;
+  }
+
+  $("plot-field").addEventListener("change", requestPaint);
+  $("plot-window").addEventListener("change", requestPaint);
+  window.addEventListener("resize", requestPaint);
+  // Once a second without data: the time axis moves on and still values extend to "now".
+  setInterval(requestPaint, 1000);
+
+  connect();
+  requestPaint();
+})();
