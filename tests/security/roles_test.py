@@ -19,6 +19,9 @@ Cases (what a user notices):
              certificate and a grant whose subject is written O-first cannot even start a
              participant
   rotated    the new key and certificate list the valves
+  web        (with --web, --hosts local) teejet-web as the observer lists the valves on
+             GET /api/valves, and with --allow-commands its page's move is answered with the
+             refusal and nothing moves; as the commander the page's move completes
 The refused cases run in parallel with short deadlines; the whole run takes about 10 s locally.
 """
 
@@ -30,6 +33,9 @@ import subprocess
 import sys
 import tempfile
 import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "web"))
+import web_client  # noqa: E402 (tests/web)
 
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
 # How long a refused participant looks for the gateway (it starts once a granted one has found
@@ -229,6 +235,62 @@ class Suite:
 
     # ---- the cases ---------------------------------------------------------------------------
 
+    def start_web(self, profile, port, *extra):
+        log = os.path.join(self.work, f"web-{port}.log")
+        self.hosts.spawn("bench", [self.args.web, "--profile", profile, "--listen",
+                                   f"127.0.0.1:{port}", *extra],
+                         env=self.env_for(profile), log=log)
+        return log
+
+    def web_valves(self, port, deadline_s=20):
+        """GET /api/valves until it lists the 4 valves with their positions; positions by
+        serial."""
+        rows = web_client.valves_when(
+            port, lambda listed: sorted(row["serial"] for row in listed) == SERIALS
+            and all(row["position"] is not None for row in listed), deadline_s)
+        return {row["serial"]: row["position"] for row in rows}
+
+    def web_move(self, port, serial, degrees):
+        """A page's move: the answer, and the final status when one came (20 s at most)."""
+        page = web_client.WebSocket(port)
+        page.receive()  # the snapshot
+        answer = page.answer(json.dumps({"command": "move", "serial": serial, "degrees": degrees,
+                                         "speed_percent": 100, "direction": "shortest"}))
+        commands = answer.get("commands") or [{}]
+        command_id = commands[0].get("command_id")
+        end = time.monotonic() + 20
+        while command_id is not None and time.monotonic() < end:
+            message = page.receive()
+            for status in message.get("statuses", []) if message["type"] == "update" else []:
+                if status["command_id"] == command_id and status["state"] != "accepted":
+                    return answer, status["state"]
+        return answer, None
+
+    def web_cases(self):
+        observer_log = self.start_web(self.profiles["watcher"], 18181)
+        seen = self.web_valves(18181)
+        self.check("teejet-web as the observer lists the 4 valves on /api/valves",
+                   sorted(seen) == SERIALS and seen.get(SERIALS[0]) == 90.0,
+                   f"{seen}, log: {open(observer_log).read().strip()[-300:]}")
+
+        self.start_web(self.profiles["watcher"], 18182, "--allow-commands")
+        self.web_valves(18182)
+        answer, final = self.web_move(18182, SERIALS[1], 45)
+        error = (answer.get("commands") or [{}])[0].get("error", "")
+        self.check("the observer's page move is answered with the refusal, nothing is sent",
+                   answer["type"] == "sent" and "may not write teejet/valve/command" in error
+                   and final is None, f"answer {answer}, final {final}")
+
+        commander_log = self.start_web(self.profiles["bench"], 18183, "--allow-commands")
+        self.web_valves(18183)
+        answer, final = self.web_move(18183, SERIALS[2], 45)
+        seen = self.web_valves(18183)
+        self.check("teejet-web as the commander moves TJV000003 to 45 degrees from its page",
+                   final == "completed" and seen.get(SERIALS[2]) == 45.0
+                   and seen.get(SERIALS[1]) == 0.0,
+                   f"answer {answer}, final {final}, positions {seen}, "
+                   f"log: {open(commander_log).read().strip()[-300:]}")
+
     def positions(self, listing):
         return {row["serial"]: row.get("position") for row in json.loads(listing)}
 
@@ -307,6 +369,9 @@ class Suite:
             self.check(name, code == want_code and want_text in output,
                        f"exit {code}, output: {output.strip()[-400:]}")
 
+        if self.args.web:
+            self.web_cases()
+
         self.check("the gateway is still running", gateway.poll() is None,
                    f"exit {gateway.returncode}")
         print(f"     (all cases: {time.monotonic() - started:.2f} s)")
@@ -324,9 +389,12 @@ def main():
     parser.add_argument("--base", help="base profile for --hosts local (the loopback profile)")
     parser.add_argument("--hosts", choices=["local", "bridged", "routed"], default="local")
     parser.add_argument("--netem", help="netem for the routed lab, e.g. 'delay 20ms'")
+    parser.add_argument("--web", help="teejet-web: its cases too (only with --hosts local)")
     args = parser.parse_args()
     if args.hosts == "local" and not args.base:
         parser.error("--hosts local needs --base")
+    if args.web and args.hosts != "local":
+        parser.error("--web needs --hosts local (the test reaches teejet-web on its own loopback)")
 
     with tempfile.TemporaryDirectory(prefix="teejet-security-") as work:
         if args.hosts == "local":
