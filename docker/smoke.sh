@@ -162,9 +162,14 @@ check "every program and library resolves (ldd)" '^all resolved$' \
       ldd "$f" | grep "not found" && { echo "$f: missing libraries"; exit 1; }
     done
     echo "all resolved"'
-for tool in valvectl valve-sim valve-decode teejet-record teejet-replay; do
+for tool in valvectl valve-sim valve-decode teejet-record teejet-replay teejet-web; do
   check "$tool --version" "^$tool [0-9]" "${RUN[@]}" --entrypoint "$tool" "$IMAGE" --version
 done
+# teejet-web (a DDS participant: --network none keeps it to the container's loopback) finds its
+# page where the image installed it.
+check "teejet-web serves its page from /opt/teejet/share/teejet-web/www" \
+  'page from /opt/teejet/share/teejet-web/www' \
+  "${RUN[@]}" --entrypoint bash "$IMAGE" -c 'timeout -s INT 3 teejet-web 2>&1; true'
 
 # The gateway on 4 simulated valves, valvectl finding them and moving one to 90 degrees, all in
 # one container: the loopback profile keeps DDS on shared memory and 127.0.0.1.
