@@ -115,9 +115,10 @@ Result<bool> CommandClient::connect(std::size_t gateways, std::size_t command_re
       },
       std::max(wanted, command_readers), until, interrupted);
   // The writer's side of a match comes first; a busy reader (a recorder taking thousands of
-  // samples a second) may learn of this writer later, and a VOLATILE reader in Fast DDS 2.9
-  // then skips what the writer's first heartbeat already counted (measured: teejet-record at
-  // 2,600 samples/s missed 1 command in 6 runs). Asked-for extra readers get a moment more.
+  // samples a second) may learn of this writer later. A Fast DDS reader then repairs what it
+  // missed from this writer (delivered() keeps the writer until it has); a VOLATILE reader of
+  // some other vendors instead skips what the first heartbeat it hears already counts (see
+  // status_reader_qos). Asked-for extra readers get a moment more for that.
   if (matched && command_readers > wanted) std::this_thread::sleep_for(kReaderSideOfMatch);
   return matched;
 }
@@ -129,6 +130,17 @@ std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
   command.origin(origin_);
   if (command_writer_ == nullptr || !command_writer_->write(&command)) return std::nullopt;
   return id;
+}
+
+bool CommandClient::delivered(Deadline until) {
+  if (command_writer_ == nullptr) return true;
+  const auto left = std::max(until - std::chrono::steady_clock::now(),
+                             std::chrono::steady_clock::duration::zero());
+  const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(left);
+  const auto nanoseconds = std::chrono::duration_cast<std::chrono::nanoseconds>(left - seconds);
+  return command_writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t{
+             static_cast<std::int32_t>(seconds.count()),
+             static_cast<std::uint32_t>(nanoseconds.count())}) == ReturnCode::RETCODE_OK;
 }
 
 std::optional<CommandStatus> CommandClient::next_status(std::uint32_t id, Deadline until) {

@@ -53,6 +53,11 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   // nullopt when none arrives by `until`.
   std::optional<CommandStatus> next_status(std::uint32_t id, Deadline until);
 
+  // Waits until every command reader this writer matched has acknowledged every command sent,
+  // or `until`; false when one has not. A reader whose own side of the match came after the
+  // write gets the command only by repair from this writer, so the writer must outlive that.
+  bool delivered(Deadline until);
+
   const std::string& origin() const { return origin_; }
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;

@@ -28,6 +28,8 @@ constexpr milliseconds kTelemetryGrace{1000};
 constexpr milliseconds kReplyGrace{1000};
 // How often a waiting command looks at the valve's position to show progress.
 constexpr milliseconds kProgressPeriod{100};
+// How long a run without --command-readers waits for its commands' acknowledgements on exit.
+constexpr milliseconds kDeliveryWait{1000};
 // Longest wait before watch's first frame, so it does not start with an empty table.
 constexpr milliseconds kWatchFirstFrame{2000};
 
@@ -255,6 +257,16 @@ class Session {
     }
     int worst = kExitOk;
     for (const auto& [serial, id] : sent) worst = std::max(worst, follow(client, serial, id));
+    if (terminal_.interrupted) return worst;
+    // Exiting deletes the writer, and with it the commands a late reader has yet to repair.
+    // Asked-for readers (a recorder that must hold every command) get the whole --timeout.
+    const bool readers_asked = invocation_.global.command_readers > 0;
+    if (!client.delivered(readers_asked ? after_timeout() : Clock::now() + kDeliveryWait) &&
+        readers_asked) {
+      complain("a command reader did not acknowledge the command(s) within " +
+               seconds_text(invocation_.global.timeout) + "; it may not hold them");
+      worst = std::max<int>(worst, kExitTimedOut);
+    }
     return worst;
   }
 
