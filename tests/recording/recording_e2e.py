@@ -70,7 +70,14 @@ class Run:
         return proc
 
     def run(self, argv, timeout=60, expect=0):
-        done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
+        try:
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired as expired:
+            # What it printed before it was killed tells a hang at start from one midway.
+            out = expired.stdout.decode(errors="replace") if expired.stdout else ""
+            err = expired.stderr.decode(errors="replace") if expired.stderr else ""
+            raise Failure(f"{' '.join(argv)} did not finish within {timeout} s; it had printed "
+                          f"{out.count(chr(10))} line(s) to stdout; stderr:\n{err[-2000:]}")
         if expect is not None and done.returncode != expect:
             raise Failure(f"{' '.join(argv)} exited {done.returncode}, expected {expect}\n"
                           f"{done.stdout}{done.stderr}")
