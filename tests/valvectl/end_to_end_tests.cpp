@@ -15,6 +15,7 @@
 
 #include "exit_codes.hpp"
 #include "observed_gateway.hpp"
+#include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
 #include "support/test_domain.hpp"
@@ -37,7 +38,8 @@ constexpr std::uint32_t kMovedWithoutWait = 5;
 constexpr std::uint32_t kJogged = 7;
 constexpr std::uint32_t kFaulty = 8;
 constexpr std::uint32_t kRaced = 9;
-constexpr std::uint32_t kValveCount = 9;
+constexpr std::uint32_t kAcknowledged = 10;
+constexpr std::uint32_t kValveCount = 10;
 constexpr std::uint32_t kSilent = 999;  // announced once, then offline
 constexpr std::uint8_t kSilentAddress = 0xF0;
 
@@ -176,6 +178,56 @@ TEST_F(ValvectlEndToEnd, InvalidArgumentsExit64BeforeAnythingIsSent) {
   const auto commands = gateway_->commands();
   ASSERT_EQ(commands.size(), before + 1);
   EXPECT_EQ(commands.back().kind(), COMMAND_STOP);
+}
+
+// A recorder must hold every command it was waited for. valvectl --command-readers therefore
+// keeps its writer until every matched reader acknowledged: a reader with no room (a KEEP_ALL
+// history of one, still full) does not, so valvectl says so after --timeout and exits 4; and
+// once that reader has room again, it gets the command from the waiting valvectl by repair.
+TEST_F(ValvectlEndToEnd, CommandReadersMustAcknowledgeBeforeValvectlExits) {
+  DdsPeer recorder(test_domain(), "one-command-recorder");
+  auto qos = dds::topics::command_reader_qos();
+  qos.resource_limits().max_samples = 1;
+  qos.resource_limits().max_samples_per_instance = 1;
+  qos.resource_limits().max_instances = 1;
+  auto* commands = recorder.reader<ValveCommand>(qos);
+  ASSERT_NE(commands, nullptr);
+  const std::string serial = codec::format_serial(kAcknowledged);
+  const std::vector<std::string> stop = {"--command-readers", "2", "stop", serial};
+
+  auto first = stop;
+  first.insert(first.begin(), {"--timeout", "10"});
+  const auto held = valvectl(first);
+  ASSERT_EQ(held.exit_code, kExitOk) << describe(held);
+  ASSERT_TRUE(eventually([&] { return commands->get_unread_count() == 1; }, 5s));
+
+  auto second = stop;
+  second.insert(second.begin(), {"--timeout", "2"});
+  const auto unacknowledged = valvectl(second);
+  EXPECT_EQ(unacknowledged.exit_code, kExitTimedOut) << describe(unacknowledged);
+  EXPECT_TRUE(contains(unacknowledged.out, serial + " stop #")) << describe(unacknowledged);
+  EXPECT_TRUE(contains(unacknowledged.err,
+                       "valvectl: a command reader did not acknowledge the command(s) within 2 s; "
+                       "it may not hold them"))
+      << describe(unacknowledged);
+
+  auto third = stop;
+  third.insert(third.begin(), {VALVECTL_PATH, "--domain", domain_text(), "--timeout", "20"});
+  Subprocess waiting(third);
+  ASSERT_TRUE(waiting.wait_for_stdout(serial + " stop #", 15s)) << waiting.err();
+  const auto ok = eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+  ValveCommand taken;
+  eprosima::fastdds::dds::SampleInfo info;
+  ASSERT_EQ(commands->take_next_sample(&taken, &info), ok);
+  ASSERT_TRUE(eventually([&] { return commands->get_unread_count() == 1; }, 10s));
+  const auto delivered = waiting.wait(25s);
+  EXPECT_EQ(delivered.exit_code, kExitOk) << describe(delivered);
+  ASSERT_EQ(commands->take_next_sample(&taken, &info), ok);
+  EXPECT_EQ(taken.serial(), kAcknowledged);
+  // Appended, not "#" + id: GCC 12 reports a false -Wrestrict on that at -O3.
+  std::string command_id = "#";
+  command_id += std::to_string(taken.command_id());
+  EXPECT_TRUE(contains(delivered.out, command_id + ":")) << describe(delivered);
 }
 
 TEST_F(ValvectlEndToEnd, UnknownSerialExits2WithoutWaitingTheWholeTimeout) {
