@@ -2,6 +2,7 @@
 
 #include "teejet/dds/conversions.hpp"
 #include "teejet/dds/names.hpp"
+#include "teejet/dds/participant.hpp"
 
 namespace teejet::dds {
 namespace {
@@ -173,6 +174,19 @@ TEST(Names, AreTheSnakeCaseWordsOfLogsAndJson) {
   EXPECT_EQ(to_string(ERROR_MIN_DEGREES_PER_SECOND), "min_degrees_per_second");
   EXPECT_EQ(to_string(BUS_ERROR_PASSIVE), "error_passive");
   EXPECT_EQ(to_string(static_cast<CommandKind>(42)), "unknown_command");
+}
+
+TEST(DdsDuration, TimeoutsBecomeSecondsAndNanosecondsClampedToWhatFastDdsHolds) {
+  using namespace std::chrono_literals;
+  const auto one_and_a_half = to_dds_duration(1500ms);
+  EXPECT_EQ(one_and_a_half.seconds, 1);
+  EXPECT_EQ(one_and_a_half.nanosec, 500'000'000u);
+  const auto past = to_dds_duration(-3s);  // a deadline already passed
+  EXPECT_EQ(past.seconds, 0);
+  EXPECT_EQ(past.nanosec, 0u);
+  const auto far = to_dds_duration(std::chrono::hours(24 * 365 * 100));
+  EXPECT_EQ(far.seconds, 0x7FFFFFFF);
+  EXPECT_EQ(far.nanosec, 0u);
 }
 
 }  // namespace

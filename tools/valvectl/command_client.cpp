@@ -134,13 +134,8 @@ std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
 
 bool CommandClient::delivered(Deadline until) {
   if (command_writer_ == nullptr) return true;
-  const auto left = std::max(until - std::chrono::steady_clock::now(),
-                             std::chrono::steady_clock::duration::zero());
-  const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(left);
-  const auto nanoseconds = std::chrono::duration_cast<std::chrono::nanoseconds>(left - seconds);
-  return command_writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t{
-             static_cast<std::int32_t>(seconds.count()),
-             static_cast<std::uint32_t>(nanoseconds.count())}) == ReturnCode::RETCODE_OK;
+  return command_writer_->wait_for_acknowledgments(dds::to_dds_duration(
+             until - std::chrono::steady_clock::now())) == ReturnCode::RETCODE_OK;
 }
 
 std::optional<CommandStatus> CommandClient::next_status(std::uint32_t id, Deadline until) {

@@ -9,6 +9,7 @@
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
+#include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::recording {
@@ -146,10 +147,8 @@ class TypedWriter final : public TopicWriter {
   }
 
   bool wait_for_acknowledgments(std::chrono::milliseconds timeout) override {
-    const auto ms = timeout.count();
-    return writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
-               static_cast<std::int32_t>(ms / 1000),
-               static_cast<std::uint32_t>(ms % 1000 * 1'000'000))) == ReturnCode_t::RETCODE_OK;
+    return writer_->wait_for_acknowledgments(dds::to_dds_duration(timeout)) ==
+           ReturnCode_t::RETCODE_OK;
   }
 
  private:

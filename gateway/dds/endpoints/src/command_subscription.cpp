@@ -79,13 +79,8 @@ CommandSubscription::~CommandSubscription() {
 }
 
 CommandSubscription::Events CommandSubscription::wait(Duration timeout) {
-  const Duration left = std::max(timeout, Duration{0});
-  const auto whole = std::chrono::duration_cast<std::chrono::seconds>(left);
-  const eprosima::fastrtps::Duration_t dds_timeout(
-      static_cast<std::int32_t>(std::min<std::int64_t>(whole.count(), 0x7FFFFFFF)),
-      static_cast<std::uint32_t>((left - whole).count()));
   ConditionSeq triggered;
-  (void)wait_set_.wait(triggered, dds_timeout);  // TIMEOUT is an answer too
+  (void)wait_set_.wait(triggered, to_dds_duration(timeout));  // TIMEOUT is an answer too
 
   wake_.set_trigger_value(false);
   Events events;

@@ -80,12 +80,8 @@ void GatewayPublisher::gateway_status(const GatewayStatus& status) {
 }
 
 bool GatewayPublisher::wait_for_statuses(Duration timeout) {
-  const auto whole = std::chrono::duration_cast<std::chrono::seconds>(timeout);
-  const eprosima::fastrtps::Duration_t dds_timeout(
-      static_cast<std::int32_t>(whole.count()),
-      static_cast<std::uint32_t>((timeout - whole).count()));
-  return command_status_.writer<CommandStatus>()->wait_for_acknowledgments(dds_timeout) ==
-         ReturnCode_t::RETCODE_OK;
+  return command_status_.writer<CommandStatus>()->wait_for_acknowledgments(
+             to_dds_duration(timeout)) == ReturnCode_t::RETCODE_OK;
 }
 
 }  // namespace teejet::dds

@@ -7,6 +7,9 @@
 // The first participant of a process sends Fast DDS's own log lines to stderr (stdout carries
 // the programs' data).
 
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -35,6 +38,15 @@ struct ParticipantOptions {
   // Runs on a Fast DDS thread: hand the news to a thread of your own.
   std::function<void(const std::string& guid_prefix)> on_participant_dropped;
 };
+
+// A timeout as Fast DDS's waits take it: below zero is zero, beyond Duration_t's seconds its
+// largest.
+inline eprosima::fastrtps::Duration_t to_dds_duration(std::chrono::nanoseconds timeout) {
+  const auto left = std::max(timeout, std::chrono::nanoseconds::zero());
+  const auto whole = std::chrono::duration_cast<std::chrono::seconds>(left);
+  return {static_cast<std::int32_t>(std::min<std::int64_t>(whole.count(), 0x7FFFFFFF)),
+          static_cast<std::uint32_t>((left - whole).count())};
+}
 
 class Participant {
  public:
