@@ -206,6 +206,9 @@ class Server {
 
   void tick(std::uint64_t stamp_ms) {
     const auto statuses = sender_.take_statuses();
+    // With no page open (most of a bench's day) there is nobody to build a frame for; a page
+    // that opens starts from a snapshot of its own.
+    if (std::lock_guard lock(mutex_); pages_.empty()) return;
     const web::Targets targets = sender_.targets();
     const web::DashboardFrame frame = web::dashboard_frame(view_.snapshot(), targets);
     std::lock_guard lock(mutex_);
