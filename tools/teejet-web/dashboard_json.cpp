@@ -51,14 +51,6 @@ nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway) {
   };
 }
 
-nlohmann::json gateways_json(const valvectl::ValveTable& table) {
-  nlohmann::json array = nlohmann::json::array();
-  for (const valvectl::GatewaySummary& gateway : table.gateways()) {
-    array.push_back(gateway_json(gateway));
-  }
-  return array;
-}
-
 DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets) {
   DashboardFrame frame;
   for (const valvectl::ValveRow& row : table.rows()) {

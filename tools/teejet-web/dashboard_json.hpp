@@ -33,12 +33,7 @@ nlohmann::json valves_json(const valvectl::ValveTable& table, const Targets& tar
 //  "rx_errors":0,"frames_in":10,"frames_out":4,"decode_errors":0,"rx_dropped":0,
 //  "valves_online":4,"valves_known":4}
 nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway);
-nlohmann::json gateways_json(const valvectl::ValveTable& table);
 
-// Collects what changed between ticks and makes one message of it, so that the page gets 20-30
-// messages a second however many samples arrive. A tick compares each valve's and gateway's JSON
-// with what the page was last sent: a valve that moved twice between ticks is sent once, with
-// its latest state. Command statuses are events, not state: every one is kept until the tick.
 // Every valve's and gateway's JSON at one instant, in the table's order: made once per tick and
 // compared by each page's batcher, so that more pages do not mean more JSON to build.
 struct DashboardFrame {
@@ -47,6 +42,10 @@ struct DashboardFrame {
 };
 DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets);
 
+// Collects what changed between ticks and makes one message of it, so that the page gets 20-30
+// messages a second however many samples arrive. A tick compares each valve's and gateway's JSON
+// with what the page was last sent: a valve that moved twice between ticks is sent once, with
+// its latest state. Command statuses are events, not state: every one is kept until the tick.
 class UpdateBatcher {
  public:
   // The first message of a page: {"type":"snapshot","valves":[...],"gateways":[...]}. What it
