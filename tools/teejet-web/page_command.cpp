@@ -118,11 +118,7 @@ Result<ValveCommand> build(std::string_view name, const json& message) {
   const auto request = dds::to_message(asked);
   if (!request) {
     // The contract names the command kind first, as parse_page_command() does: say it once.
-    std::string reason = request.error().reason;
-    if (const auto after_kind = reason.find(": "); after_kind != std::string::npos) {
-      reason.erase(0, after_kind + 2);
-    }
-    return refused(reason);
+    return refused(valvectl::without_leading_name(request.error().reason));
   }
   return valvectl::checked_command(*request);
 }

@@ -11,10 +11,15 @@ Result<ValveCommand> checked_command(const codec::ToValveMessage& message) {
   const auto frame = codec::encode(codec::kFirstValveAddress, message);
   if (frame) return dds::to_command(message);
   Error error = frame.error();
-  if (const auto after_name = error.reason.find(": "); after_name != std::string::npos) {
-    error.reason.erase(0, after_name + 2);
-  }
+  error.reason = without_leading_name(std::move(error.reason));
   return error;
+}
+
+std::string without_leading_name(std::string reason) {
+  if (const auto after_name = reason.find(": "); after_name != std::string::npos) {
+    reason.erase(0, after_name + 2);
+  }
+  return reason;
 }
 
 codec::Direction drive_direction(Direction direction) {
