@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-#include "gateway.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "teejet/can/open_bus.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/can_id.hpp"

@@ -47,7 +47,7 @@ PACKAGES=(
   nlohmann-json3-dev
   # the HTTP and WebSocket server of teejet-web (tools/teejet-web)
   libcivetweb-dev
-  # MCAP recordings (tools/mcap): chunk compression and CRC-32
+  # MCAP recordings (gateway/mcap): chunk compression and CRC-32
   libzstd-dev
   liblz4-dev
   zlib1g-dev

@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "gateway.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "options.hpp"
 #include "teejet/can/bus.hpp"
 

@@ -8,8 +8,8 @@
 #include <array>
 #include <csignal>
 
-#include "config.hpp"
-#include "gateway.hpp"
+#include "teejet/gateway/config.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "teejet/command_line.hpp"
 
 namespace {

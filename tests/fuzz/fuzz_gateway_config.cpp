@@ -12,7 +12,7 @@
 #include <string>
 #include <variant>
 
-#include "config.hpp"
+#include "teejet/gateway/config.hpp"
 #include "fuzz_input.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/participant.hpp"

@@ -1,6 +1,6 @@
 // valve-decode's whole input path: text in, one JSON object per line out, as
 // tools/valve-decode/main.cpp does it (split at '\n', a trailing '\r' dropped, blank lines
-// skipped; valve_decode::decode_log_line), checked against the parser and the codec.
+// skipped; frame_json::decode_log_line), checked against the parser and the codec.
 //
 // Input: any bytes, read as the tool reads a file.
 //
@@ -15,7 +15,7 @@
 #include <string>
 #include <string_view>
 
-#include "frame_json.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 #include "fuzz_input.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
@@ -36,7 +36,7 @@ bool valid_utf8(std::string_view text) {
 }
 
 void check_line(std::string_view line) {
-  const std::string out = valve_decode::decode_log_line(line);
+  const std::string out = frame_json::decode_log_line(line);
   // The oracle: what the line is, from the parser and the codec directly.
   const auto record = candump::parse_log_line(line);
   std::optional<codec::DecodedFrame> decoded;
@@ -63,7 +63,7 @@ void check_line(std::string_view line) {
   FUZZ_CHECK(json["t"].is_number(), out);
   // "t" is the logged time digit for digit, leading zeros of the seconds dropped.
   const auto t_text = out.substr(5, out.find(',') - 5);
-  FUZZ_CHECK(t_text == valve_decode::timestamp_json_number(record->seconds, record->microseconds),
+  FUZZ_CHECK(t_text == frame_json::timestamp_json_number(record->seconds, record->microseconds),
              out);
   FUZZ_CHECK(json["iface"].is_string(), out);
   FUZZ_CHECK(json["dir"] == codec::to_string(route.flow), out);
@@ -86,7 +86,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::string_view line = text.substr(0, end);
     text.remove_prefix(end == std::string_view::npos ? text.size() : end + 1);
     if (line.ends_with('\r')) line.remove_suffix(1);
-    if (valve_decode::is_blank_line(line)) continue;
+    if (frame_json::is_blank_line(line)) continue;
     check_line(line);
   }
   return 0;

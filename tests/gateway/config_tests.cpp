@@ -2,8 +2,8 @@
 
 #include <fstream>
 
-#include "bus_backend.hpp"
-#include "config.hpp"
+#include "teejet/gateway/bus_backend.hpp"
+#include "teejet/gateway/config.hpp"
 #include "support/eventually.hpp"
 
 namespace teejet::gateway {

@@ -15,7 +15,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <vector>
 
-#include "config.hpp"
+#include "teejet/gateway/config.hpp"
 #include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"

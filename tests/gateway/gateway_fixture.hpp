@@ -11,8 +11,8 @@
 #include <memory>
 #include <string>
 
-#include "bus_backend.hpp"
-#include "gateway.hpp"
+#include "teejet/gateway/bus_backend.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
 #include "support/valve_commands.hpp"

@@ -15,7 +15,8 @@ for f in bin/valve-decode bin/valve-sim bin/teejet-gateway bin/valvectl bin/teej
   share/teejet-web/www/plot.js share/teejet-web/www/dashboard.css \
   share/teejet/idl/valve.idl include/teejet/valve.h \
   include/teejet/valvePubSubTypes.h include/teejet/valveTypeObject.h \
-  include/teejet/codec/codec.hpp lib/cmake/TeejetDds/TeejetDdsConfig.cmake; do
+  include/teejet/codec/codec.hpp include/teejet/dds/participant.hpp \
+  include/teejet/client/valve_view.hpp lib/cmake/TeejetDds/TeejetDdsConfig.cmake; do
   [ -e "$scratch/prefix/$f" ] || { echo "FAIL: not installed: $f"; exit 1; }
 done
 

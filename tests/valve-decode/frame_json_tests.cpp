@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
-#include "frame_json.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
 
-namespace teejet::valve_decode {
+namespace teejet::frame_json {
 namespace {
 
 using nlohmann::ordered_json;
@@ -28,24 +28,24 @@ std::vector<std::string> keys_of(const ordered_json& object) {
 }
 
 TEST(ValveDecodeFrameJson, FrameAloneHasDirAddrMsgFields) {
-  const auto json = frame_json(decoded("(1.000000) can0 18EFD5D8#020384FFFFFFFFFF"));
+  const auto json = frame_object(decoded("(1.000000) can0 18EFD5D8#020384FFFFFFFFFF"));
   EXPECT_EQ(json.dump(),
             R"({"dir":"from_valve","addr":216,"msg":"position","fields":{"degrees":90.0}})");
 }
 
 TEST(ValveDecodeFrameJson, AddressIsTheValveSideInBothDirections) {
-  EXPECT_EQ(frame_json(decoded("(1.000000) can0 18EFF7D5#1100"))["addr"], 0xF7);
-  EXPECT_EQ(frame_json(decoded("(1.000000) can0 18EFD5F7#0204D2"))["addr"], 0xF7);
-  EXPECT_EQ(frame_json(decoded("(1.000000) can0 18EFF7D5#1100"))["dir"], "to_valve");
+  EXPECT_EQ(frame_object(decoded("(1.000000) can0 18EFF7D5#1100"))["addr"], 0xF7);
+  EXPECT_EQ(frame_object(decoded("(1.000000) can0 18EFD5F7#0204D2"))["addr"], 0xF7);
+  EXPECT_EQ(frame_object(decoded("(1.000000) can0 18EFF7D5#1100"))["dir"], "to_valve");
 }
 
 TEST(ValveDecodeFrameJson, MessagesWithoutFieldsGetAnEmptyObject) {
-  const auto json = frame_json(decoded("(1.000000) can0 18EFD8D5#00FFFFFFFFFFFFFF"));
+  const auto json = frame_object(decoded("(1.000000) can0 18EFD8D5#00FFFFFFFFFFFFFF"));
   EXPECT_EQ(json.dump(), R"({"dir":"to_valve","addr":216,"msg":"stop","fields":{}})");
 }
 
 TEST(ValveDecodeFrameJson, FieldsKeepWireOrderAndTypes) {
-  const auto json = frame_json(decoded("(1.000000) can0 18EFD5D9#0001E2400001C801"));
+  const auto json = frame_object(decoded("(1.000000) can0 18EFD5D9#0001E2400001C801"));
   EXPECT_EQ(keys_of(json["fields"]),
             (std::vector<std::string>{"part_number", "serial", "boot_mode"}));
   EXPECT_EQ(json["fields"].dump(),
@@ -126,4 +126,4 @@ TEST(ValveDecodeFrameJson, MessageErrorLineNamesTheRecordedMessage) {
 }
 
 }  // namespace
-}  // namespace teejet::valve_decode
+}  // namespace teejet::frame_json

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "gateway.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "support/dds_peer.hpp"
 #include "teejet/can/virtual_bus.hpp"
 

@@ -49,7 +49,7 @@ ValveCommand move(std::uint32_t serial, std::uint32_t id, float degrees) {
 }
 
 TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
-  valvectl::ValveTable table;
+  client::ValveTable table;
   table.on_presence(presence(1, true));
   table.on_position(1, 45.3, 10);
   table.on_temperature(1, 25, 31, 10);
@@ -86,7 +86,7 @@ TEST(WebValves, UnknownValuesAreNullAndValvesAreSortedBySerial) {
 TEST(WebValves, AnEmptyTableIsAnEmptyArray) { EXPECT_EQ(valves_json({}, {}).dump(), "[]"); }
 
 TEST(WebGateways, HealthHasBusStateErrorCountersFramesAndDrops) {
-  valvectl::ValveTable table;
+  client::ValveTable table;
   table.on_gateway_status(bench_status());
   ASSERT_EQ(table.gateways().size(), 1u);
   EXPECT_EQ(gateway_json(table.gateways().at(0)).dump(),
@@ -96,7 +96,7 @@ TEST(WebGateways, HealthHasBusStateErrorCountersFramesAndDrops) {
 }
 
 TEST(WebUpdates, TheSnapshotHoldsEverythingAndAQuietTickSendsNothing) {
-  valvectl::ValveTable table = three_valves();
+  client::ValveTable table = three_valves();
   table.on_gateway_status(bench_status());
   UpdateBatcher batcher;
   const json snapshot = batcher.snapshot(dashboard_frame(table, {}));
@@ -107,7 +107,7 @@ TEST(WebUpdates, TheSnapshotHoldsEverythingAndAQuietTickSendsNothing) {
 }
 
 TEST(WebUpdates, ATickCarriesOnlyTheLatestStateOfWhatChangedSinceTheLastOne) {
-  valvectl::ValveTable table = three_valves();
+  client::ValveTable table = three_valves();
   UpdateBatcher batcher;
   batcher.snapshot(dashboard_frame(table, {}));
   // Three samples of valve 2 between ticks: one entry, the latest.
@@ -128,7 +128,7 @@ TEST(WebUpdates, ATickCarriesOnlyTheLatestStateOfWhatChangedSinceTheLastOne) {
 }
 
 TEST(WebUpdates, ANewValveAGatewayChangeAndATargetAppearInTheNextTick) {
-  valvectl::ValveTable table = three_valves();
+  client::ValveTable table = three_valves();
   UpdateBatcher batcher;
   batcher.snapshot(dashboard_frame(table, {}));
   table.on_presence(presence(4, true));
@@ -144,7 +144,7 @@ TEST(WebUpdates, ANewValveAGatewayChangeAndATargetAppearInTheNextTick) {
 }
 
 TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
-  valvectl::ValveTable table = three_valves();
+  client::ValveTable table = three_valves();
   UpdateBatcher batcher;
   batcher.snapshot(dashboard_frame(table, {}));
   batcher.add_status(status(1, 7, COMMAND_ACCEPTED));

@@ -5,15 +5,15 @@
 #include <string>
 
 #include "support/valve_samples.hpp"
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
 namespace teejet::web::testing {
 
 using teejet::testing::presence;
 
 // Valves 1 and 2 online, 3 offline, on gateway "gw".
-inline valvectl::ValveTable three_valves() {
-  valvectl::ValveTable table;
+inline client::ValveTable three_valves() {
+  client::ValveTable table;
   table.on_presence(presence(1, true));
   table.on_presence(presence(2, true));
   table.on_presence(presence(3, false));

@@ -1,23 +1,23 @@
 #include "dashboard_json.hpp"
 
-#include "render.hpp"
+#include "teejet/client/json.hpp"
 #include "teejet/dds/names.hpp"
 
 namespace teejet::web {
 namespace {
 
-nlohmann::json reply_value(const valvectl::ValveTable& table, std::uint32_t serial,
+nlohmann::json reply_value(const client::ValveTable& table, std::uint32_t serial,
                            Telemetry telemetry, const char* field) {
-  const auto reply = table.reply(serial, valvectl::reply_name(telemetry));
+  const auto reply = table.reply(serial, client::reply_name(telemetry));
   if (!reply || !reply->values.contains(field)) return nullptr;
   return reply->values.at(field);
 }
 
 }  // namespace
 
-nlohmann::json valve_json(const valvectl::ValveTable& table, const valvectl::ValveRow& row,
+nlohmann::json valve_json(const client::ValveTable& table, const client::ValveRow& row,
                           const Targets& targets) {
-  nlohmann::json json = valvectl::to_json(row);
+  nlohmann::json json = client::to_json(row);
   const auto target = targets.find(row.serial);
   json["target"] =
       target == targets.end() ? nlohmann::json(nullptr) : nlohmann::json(target->second);
@@ -28,14 +28,14 @@ nlohmann::json valve_json(const valvectl::ValveTable& table, const valvectl::Val
   return json;
 }
 
-nlohmann::json valves_json(const valvectl::ValveTable& table, const Targets& targets) {
+nlohmann::json valves_json(const client::ValveTable& table, const Targets& targets) {
   nlohmann::json array = nlohmann::json::array();
-  for (const valvectl::ValveRow& row : table.rows())
+  for (const client::ValveRow& row : table.rows())
     array.push_back(valve_json(table, row, targets));
   return array;
 }
 
-nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway) {
+nlohmann::json gateway_json(const client::GatewaySummary& gateway) {
   return {
       {"gateway", gateway.name},
       {"can_interface", gateway.can_interface},
@@ -51,12 +51,12 @@ nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway) {
   };
 }
 
-DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets) {
+DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets) {
   DashboardFrame frame;
-  for (const valvectl::ValveRow& row : table.rows()) {
+  for (const client::ValveRow& row : table.rows()) {
     frame.valves.emplace_back(row.serial, valve_json(table, row, targets));
   }
-  for (const valvectl::GatewaySummary& gateway : table.gateways()) {
+  for (const client::GatewaySummary& gateway : table.gateways()) {
     frame.gateways.emplace_back(gateway.name, gateway_json(gateway));
   }
   return frame;
@@ -74,7 +74,7 @@ nlohmann::json UpdateBatcher::snapshot(const DashboardFrame& frame) {
 }
 
 void UpdateBatcher::add_status(const CommandStatus& status) {
-  statuses_.push_back(valvectl::status_json(status));
+  statuses_.push_back(client::status_json(status));
 }
 
 std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
@@ -99,7 +99,7 @@ std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
 void CommandTracker::on_sent(const ValveCommand& command) {
   if (command.kind() == COMMAND_TARGET_DEGREES) {
     // The wire's float, at its 0.1 degree grid, as positions are shown.
-    targets_[command.serial()] = valvectl::at_resolution(command.degrees(), 10);
+    targets_[command.serial()] = client::at_resolution(command.degrees(), 10);
     running_[command.serial()] = command.command_id();
   } else {
     targets_.erase(command.serial());

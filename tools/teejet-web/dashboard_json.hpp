@@ -1,7 +1,7 @@
 #pragma once
 
 // The JSON teejet-web sends: the valve table (GET /api/valves and the page's first message),
-// gateway health, and one batched update per tick. Pure functions of valvectl's ValveTable, so
+// gateway health, and one batched update per tick. Pure functions of the client's ValveTable, so
 // the page shows exactly what `valvectl list` and `watch` would, and the tests pin the format.
 // docs/web.md describes every message.
 
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "teejet/valve.h"
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
 namespace teejet::web {
 
@@ -21,18 +21,18 @@ namespace teejet::web {
 // teejet-web itself sent (see CommandTracker), since statuses of other senders are not followed.
 using Targets = std::map<std::uint32_t, double>;
 
-// valvectl's row (serial, address, online, boot_mode, position, temperature_c, volts, errors,
+// The client's row (serial, address, online, boot_mode, position, temperature_c, volts, errors,
 // gateway) with what the dashboard adds: "target" of the running command, "amps" and
 // "speed_percent"/"direction" from the latest current and speed replies; null when unknown.
-nlohmann::json valve_json(const valvectl::ValveTable& table, const valvectl::ValveRow& row,
+nlohmann::json valve_json(const client::ValveTable& table, const client::ValveRow& row,
                           const Targets& targets);
 // Every valve, by serial: the body of GET /api/valves.
-nlohmann::json valves_json(const valvectl::ValveTable& table, const Targets& targets);
+nlohmann::json valves_json(const client::ValveTable& table, const Targets& targets);
 
 // {"gateway":"bench","can_interface":"can0","bus_state":"error_active","tx_errors":0,
 //  "rx_errors":0,"frames_in":10,"frames_out":4,"decode_errors":0,"rx_dropped":0,
 //  "valves_online":4,"valves_known":4}
-nlohmann::json gateway_json(const valvectl::GatewaySummary& gateway);
+nlohmann::json gateway_json(const client::GatewaySummary& gateway);
 
 // Every valve's and gateway's JSON at one instant, in the table's order: made once per tick and
 // compared by each page's batcher, so that more pages do not mean more JSON to build.
@@ -40,7 +40,7 @@ struct DashboardFrame {
   std::vector<std::pair<std::uint32_t, nlohmann::json>> valves;
   std::vector<std::pair<std::string, nlohmann::json>> gateways;
 };
-DashboardFrame dashboard_frame(const valvectl::ValveTable& table, const Targets& targets);
+DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets);
 
 // Collects what changed between ticks and makes one message of it, so that the page gets 20-30
 // messages a second however many samples arrive. A tick compares each valve's and gateway's JSON

@@ -1,4 +1,4 @@
-// teejet-web: the bench dashboard's server (issue 13). A DDS participant that keeps valvectl's
+// teejet-web: the bench dashboard's server (issue 13). A DDS participant that keeps the client's
 // table of valves and serves it over HTTP (GET /api/valves) and a WebSocket (/ws) that pushes one
 // batched update per tick and, with --allow-commands, takes commands. The JSON is the core's
 // (dashboard_json, page_command); this file only wires CivetWeb and DDS to it.
@@ -25,14 +25,14 @@
 #include <thread>
 #include <vector>
 
-#include "command_client.hpp"
+#include "teejet/client/command_client.hpp"
 #include "dashboard_json.hpp"
 #include "listen_address.hpp"
 #include "page_command.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/stop_signals.hpp"
-#include "valve_view.hpp"
+#include "teejet/client/valve_view.hpp"
 #include "web_assets.hpp"
 
 namespace {
@@ -62,10 +62,10 @@ struct Options {
   std::string www;
 };
 
-// Writes commands through valvectl's CommandClient and follows their statuses for the ticks.
+// Writes commands through the client's CommandClient and follows their statuses for the ticks.
 class DdsSender final : public web::CommandSender {
  public:
-  DdsSender(teejet::dds::Participant& participant, valvectl::ValveView& view)
+  DdsSender(teejet::dds::Participant& participant, client::ValveView& view)
       : participant_(participant), view_(view) {}
 
   Result<std::uint32_t> send(ValveCommand command) override {
@@ -105,14 +105,14 @@ class DdsSender final : public web::CommandSender {
  private:
   // Connects on the first command: a read-only dashboard never announces a command writer.
   // Under its own lock, so that ticks go on while discovery takes its time.
-  Result<valvectl::CommandClient*> connected() {
+  Result<client::CommandClient*> connected() {
     std::lock_guard connecting(connect_mutex_);
     {
       std::lock_guard lock(mutex_);
       if (client_) return client_.get();
     }
     auto made =
-        valvectl::CommandClient::create(participant_, valvectl::default_origin("teejet-web"));
+        client::CommandClient::create(participant_, client::default_origin("teejet-web"));
     if (!made) return made.error();
     const std::size_t gateways = std::max<std::size_t>(1, view_.snapshot().gateways().size());
     const std::atomic<bool> never{false};
@@ -127,10 +127,10 @@ class DdsSender final : public web::CommandSender {
   }
 
   teejet::dds::Participant& participant_;
-  valvectl::ValveView& view_;
+  client::ValveView& view_;
   std::mutex connect_mutex_;
   std::mutex mutex_;
-  std::unique_ptr<valvectl::CommandClient> client_;
+  std::unique_ptr<client::CommandClient> client_;
   web::CommandTracker tracker_;
   std::set<std::uint32_t> open_;  // command ids not yet final
 };
@@ -201,7 +201,7 @@ class Page {
 // The open WebSockets, each with what it was last sent.
 class Server {
  public:
-  Server(const Options& options, valvectl::ValveView& view, DdsSender& sender)
+  Server(const Options& options, client::ValveView& view, DdsSender& sender)
       : policy_{options.allow_commands, options.token}, view_(view), sender_(sender) {}
 
   void tick(std::uint64_t stamp_ms) {
@@ -296,7 +296,7 @@ class Server {
   }
 
   const web::CommandPolicy policy_;
-  valvectl::ValveView& view_;
+  client::ValveView& view_;
   DdsSender& sender_;
   std::mutex mutex_;
   std::map<mg_connection*, std::unique_ptr<Page>> pages_;
@@ -362,7 +362,7 @@ int main(int argc, char** argv) {
     std::cerr << "teejet-web: " << participant.error().reason << '\n';
     return kExitFailure;
   }
-  auto view = valvectl::ValveView::create(**participant);
+  auto view = client::ValveView::create(**participant);
   if (!view) {
     std::cerr << "teejet-web: " << view.error().reason << '\n';
     return kExitFailure;

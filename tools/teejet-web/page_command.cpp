@@ -5,8 +5,8 @@
 #include <limits>
 #include <set>
 
-#include "command_check.hpp"
-#include "names.hpp"
+#include "teejet/client/command_check.hpp"
+#include "teejet/client/names.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/conversions.hpp"
 
@@ -35,7 +35,7 @@ constexpr const char* kReadOnly =
     "commands are disabled: teejet-web runs read-only (start it with --allow-commands)";
 constexpr const char* kCommandNames = "move, stop, stop_all, manual, jog, request, clear_errors";
 
-Result<std::uint32_t> known_serial(const json& value, const valvectl::ValveTable& table) {
+Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& table) {
   if (!value.is_string()) return refused("serial must be a string like \"TJV000001\"");
   const auto text = value.get<std::string>();
   const auto serial = codec::parse_serial(text);
@@ -63,13 +63,13 @@ Result<Direction> direction_of(const json& message, bool allow_shortest) {
   const json& value = message.at("direction");
   const char* allowed = allow_shortest ? "open, close or shortest" : "open or close";
   if (!value.is_string()) return refused(std::string("direction must be ") + allowed);
-  const auto direction = valvectl::parse_direction(value.get<std::string>(), allow_shortest);
+  const auto direction = client::parse_direction(value.get<std::string>(), allow_shortest);
   if (!direction)
     return refused("direction \"" + value.get<std::string>() + "\" is not " + allowed);
   return *direction;
 }
 
-// The command for one valve command message, checked by valvectl's rules.
+// The command for one valve command message, checked by the client's rules.
 Result<ValveCommand> build(std::string_view name, const json& message) {
   const auto speed = [&]() { return whole_number(message, "speed_percent"); };
   if (name == "move") {
@@ -78,28 +78,28 @@ Result<ValveCommand> build(std::string_view name, const json& message) {
     if (!s) return s.error();
     auto d = direction_of(message, /*allow_shortest=*/true);
     if (!d) return d.error();
-    return valvectl::checked_command(codec::TargetDegrees{*s, valvectl::target_direction(*d),
+    return client::checked_command(codec::TargetDegrees{*s, client::target_direction(*d),
                                                           message.at("degrees").get<double>()});
   }
-  if (name == "stop" || name == "stop_all") return valvectl::checked_command(codec::Stop{});
-  if (name == "clear_errors") return valvectl::checked_command(codec::ClearErrors{});
+  if (name == "stop" || name == "stop_all") return client::checked_command(codec::Stop{});
+  if (name == "clear_errors") return client::checked_command(codec::ClearErrors{});
   if (name == "manual" || name == "jog") {
     auto s = speed();
     if (!s) return s.error();
     auto d = direction_of(message, /*allow_shortest=*/false);
     if (!d) return d.error();
     if (name == "manual") {
-      return valvectl::checked_command(codec::Manual{*s, valvectl::drive_direction(*d)});
+      return client::checked_command(codec::Manual{*s, client::drive_direction(*d)});
     }
     auto ms = whole_number(message, "milliseconds");
     if (!ms) return ms.error();
-    return valvectl::checked_command(
-        codec::MillisecondsToRun{*s, valvectl::drive_direction(*d), *ms});
+    return client::checked_command(
+        codec::MillisecondsToRun{*s, client::drive_direction(*d), *ms});
   }
   // request
   const json& what = message.at("telemetry");
   const auto telemetry =
-      what.is_string() ? valvectl::parse_telemetry(what.get<std::string>()) : std::nullopt;
+      what.is_string() ? client::parse_telemetry(what.get<std::string>()) : std::nullopt;
   if (!telemetry) {
     return refused("telemetry " + what.dump() +
                    " is not one of version position temperature voltage current dps speed "
@@ -118,14 +118,14 @@ Result<ValveCommand> build(std::string_view name, const json& message) {
   const auto request = dds::to_message(asked);
   if (!request) {
     // The contract names the command kind first, as parse_page_command() does: say it once.
-    return refused(valvectl::without_leading_name(request.error().reason));
+    return refused(client::without_leading_name(request.error().reason));
   }
-  return valvectl::checked_command(*request);
+  return client::checked_command(*request);
 }
 
 }  // namespace
 
-Result<PageCommand> parse_page_command(std::string_view text, const valvectl::ValveTable& table) {
+Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table) {
   if (text.size() > kMaxCommandBytes) {
     return refused("message of " + std::to_string(text.size()) + " bytes is over the limit of " +
                    std::to_string(kMaxCommandBytes));
@@ -133,7 +133,7 @@ Result<PageCommand> parse_page_command(std::string_view text, const valvectl::Va
   return check_page_command(json::parse(text, nullptr, /*allow_exceptions=*/false), table);
 }
 
-Result<PageCommand> check_page_command(const json& message, const valvectl::ValveTable& table) {
+Result<PageCommand> check_page_command(const json& message, const client::ValveTable& table) {
   if (message.is_discarded()) return refused("malformed JSON");
   if (!message.is_object()) return refused("a command must be a JSON object");
   if (!message.contains("command") || !message.at("command").is_string()) {
@@ -159,7 +159,7 @@ Result<PageCommand> check_page_command(const json& message, const valvectl::Valv
 
   PageCommand checked;
   if (name == "stop_all") {
-    for (const valvectl::ValveRow& row : table.rows()) {
+    for (const client::ValveRow& row : table.rows()) {
       if (row.online) checked.serials.push_back(row.serial);
     }
     if (checked.serials.empty()) return refused("stop_all: no valve is online");
@@ -178,7 +178,7 @@ json command_policy_json(const CommandPolicy& policy) {
   return {{"allowed", policy.allow_commands}, {"token_required", !policy.token.empty()}};
 }
 
-json handle_page_message(std::string_view text, const valvectl::ValveTable& table,
+json handle_page_message(std::string_view text, const client::ValveTable& table,
                          const CommandPolicy& policy, CommandSender& sender) {
   json id = nullptr;
   const auto refuse = [&](const std::string& reason) {

@@ -1,7 +1,7 @@
 #pragma once
 
 // The commands the page may send over its WebSocket, parsed and checked before anything reaches
-// DDS. The range rules are valvectl's (valvectl::checked_command, which encodes as the gateway
+// DDS. The range rules are the client library's (client::checked_command, which encodes as the gateway
 // will); the valve must be in the table. handle_page_message() either hands every command to a
 // CommandSender or refuses with a reason and sends nothing, so a test with a recording sender
 // proves that bad input never reaches a valve. docs/web.md lists the messages.
@@ -16,7 +16,7 @@
 
 #include "teejet/core/result.hpp"
 #include "teejet/valve.h"
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
 namespace teejet::web {
 
@@ -31,10 +31,10 @@ struct PageCommand {
 
 // {"command":"move","serial":"TJV000001","degrees":90,"speed_percent":100,"direction":"open"}
 // and the others of docs/web.md; an Error names what was wrong.
-Result<PageCommand> parse_page_command(std::string_view text, const valvectl::ValveTable& table);
+Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table);
 // The same for a message already parsed (discarded when it was not JSON).
 Result<PageCommand> check_page_command(const nlohmann::json& message,
-                                       const valvectl::ValveTable& table);
+                                       const client::ValveTable& table);
 
 // Where checked commands go: CommandClient in teejet-web, a recorder in the tests.
 class CommandSender {
@@ -57,7 +57,7 @@ nlohmann::json command_policy_json(const CommandPolicy& policy);
 // {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did
 // not take has "error":"why" instead of "command_id") or
 // {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" (null without).
-nlohmann::json handle_page_message(std::string_view text, const valvectl::ValveTable& table,
+nlohmann::json handle_page_message(std::string_view text, const client::ValveTable& table,
                                    const CommandPolicy& policy, CommandSender& sender);
 
 }  // namespace teejet::web

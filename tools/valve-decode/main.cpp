@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "frame_json.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 #include "mcap_input.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
@@ -67,8 +67,8 @@ FILEs are still decoded), or the output could not be written; 2 for a bad comman
 
 void decode_line(std::string_view text, bool flush) {
   if (text.ends_with('\r')) text.remove_suffix(1);  // CRLF logs from Windows tools
-  if (teejet::valve_decode::is_blank_line(text)) return;
-  std::cout << teejet::valve_decode::decode_log_line(text) << '\n';
+  if (teejet::frame_json::is_blank_line(text)) return;
+  std::cout << teejet::frame_json::decode_log_line(text) << '\n';
   // Live pipes (`candump -L can0 | valve-decode`) must see each frame at once. cin's tie to
   // cout happens to flush too, but that is easy to lose when tuning stream settings.
   if (flush) std::cout.flush();

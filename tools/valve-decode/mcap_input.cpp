@@ -3,11 +3,14 @@
 #include <optional>
 #include <set>
 
-#include "frame_json.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 #include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/mcap/reader.hpp"
 
 namespace teejet::valve_decode {
+
+using frame_json::decode_record;
+using frame_json::message_error_json_line;
 namespace {
 
 constexpr std::string_view kBusFrameSchema = "teejet::BusFrame";

@@ -6,15 +6,18 @@
 #include <cmath>
 #include <sstream>
 
-#include "command_check.hpp"
+#include "teejet/client/command_check.hpp"
 #include "exit_codes.hpp"
-#include "names.hpp"
+#include "teejet/client/names.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/dds/participant.hpp"
 
 namespace teejet::valvectl {
+
+using namespace client;
+
 namespace {
 
 constexpr const char* kDescription =

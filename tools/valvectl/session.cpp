@@ -10,13 +10,16 @@
 #include <variant>
 #include <vector>
 
-#include "command_client.hpp"
+#include "teejet/client/command_client.hpp"
 #include "exit_codes.hpp"
 #include "render.hpp"
 #include "teejet/codec/codec.hpp"
-#include "valve_view.hpp"
+#include "teejet/client/valve_view.hpp"
 
 namespace teejet::valvectl {
+
+using namespace client;
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -227,7 +230,7 @@ class Session {
     for (const std::uint32_t serial : serials) gateways.insert(table.row(serial)->gateway);
     const std::size_t expected_gateways = std::max(gateways.size(), table.gateways().size());
 
-    auto made = CommandClient::create(*participant_, default_origin());
+    auto made = CommandClient::create(*participant_, default_origin("valvectl"));
     if (!made) {
       complain(made.error().reason);
       return kExitFailure;

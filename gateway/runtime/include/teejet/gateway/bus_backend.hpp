@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "config.hpp"
+#include "teejet/gateway/config.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/core/result.hpp"
 #include "teejet/sim/simulator.hpp"

@@ -1,4 +1,4 @@
-#include "bus_backend.hpp"
+#include "teejet/gateway/bus_backend.hpp"
 
 #include <unistd.h>
 

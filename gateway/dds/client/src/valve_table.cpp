@@ -1,10 +1,10 @@
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
 #include <algorithm>
 
-#include "names.hpp"
+#include "teejet/client/names.hpp"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 std::string reply_name(Telemetry telemetry) {
   switch (telemetry) {
@@ -141,4 +141,4 @@ bool ValveTable::telemetry_complete() const {
   });
 }
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "teejet/dds/participant.hpp"
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 using Deadline = std::chrono::steady_clock::time_point;
 
@@ -68,4 +68,4 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
       error_instances_;
 };
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

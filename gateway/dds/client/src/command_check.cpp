@@ -1,10 +1,10 @@
-#include "command_check.hpp"
+#include "teejet/client/command_check.hpp"
 
 #include "teejet/codec/can_id.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/conversions.hpp"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 Result<ValveCommand> checked_command(const codec::ToValveMessage& message) {
   // Any valve address will do: the range rules do not depend on it.
@@ -38,4 +38,4 @@ codec::TargetDirection target_direction(Direction direction) {
   return codec::TargetDirection::kShortest;
 }
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -2,11 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "names.hpp"
+#include "teejet/client/names.hpp"
 #include "support/valve_samples.hpp"
-#include "valve_table.hpp"
+#include "teejet/client/valve_table.hpp"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 namespace {
 
 using teejet::testing::presence;
@@ -108,4 +108,4 @@ TEST(ValvectlNames, TelemetryWordsRoundTrip) {
 }
 
 }  // namespace
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

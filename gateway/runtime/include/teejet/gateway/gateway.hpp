@@ -8,8 +8,8 @@
 #include <memory>
 #include <thread>
 
-#include "bus_backend.hpp"
-#include "config.hpp"
+#include "teejet/gateway/bus_backend.hpp"
+#include "teejet/gateway/config.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/dds/command_subscription.hpp"

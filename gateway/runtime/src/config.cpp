@@ -1,4 +1,4 @@
-#include "config.hpp"
+#include "teejet/gateway/config.hpp"
 
 #include <map>
 #include <sstream>

@@ -18,12 +18,12 @@
 #include <string_view>
 
 #include "teejet/dds/participant.hpp"
-#include "valve_view.hpp"
+#include "teejet/client/valve_view.hpp"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 // "PROGRAM@HOST:PID", at most 64 characters (the IDL's bound).
-std::string default_origin(std::string_view program = "valvectl");
+std::string default_origin(std::string_view program);
 
 class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
  public:
@@ -76,4 +76,4 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   std::map<std::uint32_t, std::deque<CommandStatus>> statuses_;  // by command_id, not yet read
 };
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

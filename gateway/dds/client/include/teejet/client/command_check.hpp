@@ -10,7 +10,7 @@
 #include "teejet/core/result.hpp"
 #include "teejet/valve.h"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 // The command that carries `message` (serial, command_id and origin left for the sender), or an
 // Error whose reason starts with the offending field as the codec names it ("speed_percent 101
@@ -25,4 +25,4 @@ std::string without_leading_name(std::string reason);
 codec::Direction drive_direction(Direction direction);
 codec::TargetDirection target_direction(Direction direction);
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

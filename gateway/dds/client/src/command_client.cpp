@@ -1,4 +1,4 @@
-#include "command_client.hpp"
+#include "teejet/client/command_client.hpp"
 
 #include <unistd.h>
 
@@ -13,7 +13,7 @@
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 using eprosima::fastdds::dds::DataReader;
 using eprosima::fastdds::dds::SampleInfo;
@@ -161,4 +161,4 @@ void CommandClient::on_data_available(DataReader* reader) {
   arrived_.notify_all();
 }
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -1,4 +1,4 @@
-#include "gateway.hpp"
+#include "teejet/gateway/gateway.hpp"
 
 #include <pthread.h>
 #include <spdlog/spdlog.h>

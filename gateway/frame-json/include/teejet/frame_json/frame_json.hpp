@@ -11,13 +11,13 @@
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
 
-namespace teejet::valve_decode {
+namespace teejet::frame_json {
 
 // The frame alone, for tools that put their own context around it:
 //   {"dir":"from_valve","addr":216,"msg":"position","fields":{"degrees":90.0}}
 // "addr" is the valve's address whichever way the frame goes; "fields" is {} for messages
 // without fields.
-nlohmann::ordered_json frame_json(const codec::DecodedFrame& frame);
+nlohmann::ordered_json frame_object(const codec::DecodedFrame& frame);
 
 // A candump timestamp as a JSON number with exactly the logged digits: 7 -> "1700000000.000007".
 // Written as text because no double prints back every microsecond timestamp digit for digit
@@ -53,4 +53,4 @@ std::string decode_log_line(std::string_view line);
 // Lines of spaces, tabs and carriage returns only: skipped, not reported.
 bool is_blank_line(std::string_view line);
 
-}  // namespace teejet::valve_decode
+}  // namespace teejet::frame_json

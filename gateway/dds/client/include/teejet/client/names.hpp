@@ -9,7 +9,7 @@
 #include "teejet/dds/names.hpp"
 #include "teejet/valve.h"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 // The WHAT of `valvectl request`: version position temperature voltage current dps speed
 // run-time cycle-counts.
@@ -21,4 +21,4 @@ std::optional<Direction> parse_direction(std::string_view word, bool allow_short
 
 using dds::to_string;
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -1,16 +1,16 @@
-#include "valve_view.hpp"
+#include "teejet/client/valve_view.hpp"
 
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <vector>
 
-#include "names.hpp"
-#include "render.hpp"
+#include "teejet/client/names.hpp"
+#include "teejet/client/json.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 using eprosima::fastdds::dds::DataReader;
 using eprosima::fastdds::dds::SampleInfo;
@@ -200,4 +200,4 @@ bool ValveView::wait_until(const Condition& condition, Deadline until,
   }
 }
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -13,7 +13,7 @@
 
 #include "teejet/valve.h"
 
-namespace teejet::valvectl {
+namespace teejet::client {
 
 // One line of `valvectl list`.
 struct ValveRow {
@@ -97,4 +97,4 @@ class ValveTable {
   std::size_t gateways_matched_ = 0;
 };
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client

@@ -1,10 +1,10 @@
-#include "frame_json.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 
 #include <array>
 #include <cstdio>
 #include <variant>
 
-namespace teejet::valve_decode {
+namespace teejet::frame_json {
 namespace {
 
 using nlohmann::ordered_json;
@@ -33,7 +33,7 @@ ordered_json fields_json(const codec::AnyMessage& message) {
 
 }  // namespace
 
-ordered_json frame_json(const codec::DecodedFrame& frame) {
+ordered_json frame_object(const codec::DecodedFrame& frame) {
   ordered_json json;
   json["dir"] = codec::to_string(frame.route.flow);
   json["addr"] = frame.route.valve_address;
@@ -58,7 +58,7 @@ std::string record_json_line(const candump::LogRecord& record, const codec::Deco
   ordered_json members;
   if (gateway) members["gw"] = *gateway;
   members["iface"] = record.interface_name;
-  const auto frame_members = frame_json(frame);
+  const auto frame_members = frame_object(frame);
   for (const auto& member : frame_members.items()) members[member.key()] = member.value();
   // nlohmann cannot embed preformatted number text, so "t" is spliced in front of the rest.
   return "{\"t\":" + timestamp_json_number(record.seconds, record.microseconds) + "," +
@@ -106,4 +106,4 @@ bool is_blank_line(std::string_view line) {
   return line.find_first_not_of(" \t\r") == std::string_view::npos;
 }
 
-}  // namespace teejet::valve_decode
+}  // namespace teejet::frame_json

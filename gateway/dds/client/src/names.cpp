@@ -1,9 +1,9 @@
-#include "names.hpp"
+#include "teejet/client/names.hpp"
 
 #include <array>
 #include <utility>
 
-namespace teejet::valvectl {
+namespace teejet::client {
 namespace {
 
 constexpr std::array<std::pair<std::string_view, Telemetry>, 9> kTelemetryWords{{
@@ -41,4 +41,4 @@ std::optional<Direction> parse_direction(std::string_view word, bool allow_short
   return std::nullopt;
 }
 
-}  // namespace teejet::valvectl
+}  // namespace teejet::client
