@@ -2,10 +2,12 @@
 
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <optional>
 
 #include "message_table.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::codec {
 namespace detail {
@@ -48,10 +50,7 @@ Result<Msg> decode_fields(Bytes payload) {
   FieldError failure;
   std::apply([&](const auto&... f) { (void)((failure = f.decode(payload, msg), !failure) && ...); },
              s.fields);
-  if (failure) {
-    failure->reason = std::string(s.name) + ": " + failure->reason;
-    return *std::move(failure);
-  }
+  if (failure) return in_context(s.name, *std::move(failure));
   return msg;
 }
 
@@ -91,8 +90,7 @@ struct Dispatch<std::variant<Ts...>> {
           frame.data.fill(options.pad_byte);
           frame.data[0] = kSpec<T>.id;
           if (auto failure = encode_fields(msg, frame.data)) {
-            failure->reason = std::string(kSpec<T>.name) + ": " + failure->reason;
-            return *std::move(failure);
+            return in_context(kSpec<T>.name, *std::move(failure));
           }
           frame.dlc = static_cast<std::uint8_t>(options.pad_to_eight ? CanFrame::kMaxData
                                                                      : kSpec<T>.length());
@@ -120,6 +118,123 @@ void visit_fields(const Variant& message, const FieldVisitor& visitor) {
                    kSpec<std::decay_t<decltype(msg)>>.fields);
       },
       message);
+}
+
+// ---- The table as data (table.hpp) ------------------------------------------------------
+
+std::string_view without_prefix(std::string_view name, std::string_view prefix) {
+  return name.starts_with(prefix) ? name.substr(prefix.size()) : name;
+}
+
+std::string_view without_suffix(std::string_view name, std::string_view suffix) {
+  return name.ends_with(suffix) ? name.substr(0, name.size() - suffix.size()) : name;
+}
+
+template <class Msg>
+MessageInfo info_of(Flow flow) {
+  constexpr auto& s = kSpec<Msg>;
+  MessageInfo info;
+  info.id = s.id;
+  info.name = s.name;
+  info.flow = flow;
+  std::apply([&](const auto&... f) { (info.fields.push_back(f.info()), ...); }, s.fields);
+  info.run_command = s.run_command;
+  info.reply = s.reply;
+  info.telemetry_request = s.telemetry_request;
+  if (s.error) info.error_kind = without_suffix(s.name, "_error");
+  return info;
+}
+
+template <class... Ts>
+std::vector<MessageInfo> infos_of(std::type_identity<std::variant<Ts...>>, Flow flow) {
+  return {info_of<Ts>(flow)...};
+}
+
+// Both directions, in the order of the variants (the sheet's); a request's subject is its name
+// without "request_", and its reply has the same subject.
+struct Tables {
+  std::vector<MessageInfo> to_valve =
+      infos_of(std::type_identity<ToValveMessage>{}, Flow::kToValve);
+  std::vector<MessageInfo> from_valve =
+      infos_of(std::type_identity<FromValveMessage>{}, Flow::kFromValve);
+  std::vector<std::string_view> telemetry;
+  std::vector<std::string_view> errors;
+
+  Tables() {
+    for (MessageInfo& request : to_valve) {
+      if (!request.reply) continue;
+      request.subject = without_prefix(request.name, "request_");
+      if (request.telemetry_request) telemetry.push_back(request.subject);
+      for (MessageInfo& reply : from_valve) {
+        if (reply.id == *request.reply) reply.subject = request.subject;
+      }
+    }
+    for (const MessageInfo& message : from_valve) {
+      if (!message.error_kind.empty()) errors.push_back(message.error_kind);
+    }
+  }
+};
+
+const Tables& tables() {
+  static const Tables made;
+  return made;
+}
+
+// The message of the variant's alternative `index`, every field zero.
+template <class... Ts>
+std::variant<Ts...> blank(std::type_identity<std::variant<Ts...>>, std::size_t index) {
+  static const std::array<std::variant<Ts...>, sizeof...(Ts)> blanks{std::variant<Ts...>{Ts{}}...};
+  return blanks.at(index);
+}
+
+// A word as people type it, in the table's spelling: lower case, '_' for '-', and the older
+// words of the command line (valvectl request dps|speed, valve-sim's min-dps) for today's.
+std::string table_spelling(std::string_view word) {
+  std::string spelled(word);
+  for (char& c : spelled) {
+    if (c == '-') c = '_';
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  static constexpr std::array<std::pair<std::string_view, std::string_view>, 3> kOlderWords{{
+      {"dps", "degrees_per_second"},
+      {"speed", "speed_direction"},
+      {"min_dps", "min_degrees_per_second"},
+  }};
+  for (const auto& [older, today] : kOlderWords) {
+    if (spelled == older) return std::string(today);
+  }
+  return spelled;
+}
+
+template <class Variant>
+Status set_field_of(Variant& message, std::string_view name, const FieldValue& value) {
+  return std::visit(
+      [&](auto& msg) -> Status {
+        constexpr auto& s = kSpec<std::decay_t<decltype(msg)>>;
+        std::optional<FieldError> result;
+        std::apply(
+            [&](const auto&... f) {
+              (void)((f.name == name ? (result = f.assign(msg, value), true) : false) || ...);
+            },
+            s.fields);
+        if (!result) {
+          return Error{ErrorCode::kInvalidValue,
+                       std::string(s.name) + " has no field " + std::string(name), 0,
+                       std::string(name), "is not a field of " + std::string(s.name)};
+        }
+        if (*result) return in_context(s.name, **std::move(result));
+        return {};
+      },
+      message);
+}
+
+template <class Variant>
+std::optional<FieldValue> field_value_of(const Variant& message, std::string_view name) {
+  std::optional<FieldValue> found;
+  visit_fields(message, [&](std::string_view field, const FieldValue& value) {
+    if (field == name) found = value;
+  });
+  return found;
 }
 
 Result<std::uint8_t> check_valve_address(std::uint8_t address) {
@@ -277,6 +392,132 @@ std::string format_version(const SoftwareVersion& version) {
     result += text.data();
   }
   return result;
+}
+
+Result<SoftwareVersion> parse_version(std::string_view text) {
+  const std::string original(text);
+  const auto fail = [&] {
+    return Error{ErrorCode::kInvalidValue,
+                 "version '" + original +
+                     "' is not MAJOR.MINOR with an optional test character, e.g. 1.02e"};
+  };
+  const auto dot = text.find('.');
+  if (dot == std::string_view::npos) return fail();
+  unsigned major = 0;
+  unsigned minor = 0;
+  const auto major_text = text.substr(0, dot);
+  const auto [major_end, major_ec] =
+      std::from_chars(major_text.data(), major_text.data() + major_text.size(), major);
+  if (major_text.empty() || major_ec != std::errc() ||
+      major_end != major_text.data() + major_text.size() || major > 255) {
+    return fail();
+  }
+  auto rest = text.substr(dot + 1);
+  const auto [minor_end, minor_ec] = std::from_chars(rest.data(), rest.data() + rest.size(), minor);
+  if (minor_ec != std::errc() || minor > 255) return fail();
+  rest.remove_prefix(static_cast<std::size_t>(minor_end - rest.data()));
+  char test = 0;
+  if (rest.size() == 1 && rest[0] >= 0x21 && rest[0] <= 0x7E) {
+    test = rest[0];
+  } else if (!rest.empty()) {
+    return fail();
+  }
+  return SoftwareVersion{major, minor, test};
+}
+
+// ---- table.hpp ------------------------------------------------------------------------------
+
+const std::vector<MessageInfo>& message_table(Flow flow) {
+  return flow == Flow::kToValve ? detail::tables().to_valve : detail::tables().from_valve;
+}
+
+const MessageInfo& describe(const ToValveMessage& message) {
+  return detail::tables().to_valve.at(message.index());
+}
+
+const MessageInfo& describe(const FromValveMessage& message) {
+  return detail::tables().from_valve.at(message.index());
+}
+
+const FieldInfo* find_field(const MessageInfo& message, std::string_view name) {
+  for (const FieldInfo& field : message.fields) {
+    if (field.name == name) return &field;
+  }
+  return nullptr;
+}
+
+std::string_view subject(const ToValveMessage& message) { return describe(message).subject; }
+std::string_view subject(const FromValveMessage& message) { return describe(message).subject; }
+
+const std::vector<std::string_view>& telemetry_names() { return detail::tables().telemetry; }
+
+std::optional<ToValveMessage> telemetry_request(std::string_view word) {
+  const std::string spelled = detail::table_spelling(word);
+  const auto& requests = detail::tables().to_valve;
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    if (requests[i].telemetry_request && requests[i].subject == spelled) {
+      return detail::blank(std::type_identity<ToValveMessage>{}, i);
+    }
+  }
+  return std::nullopt;
+}
+
+const std::vector<std::string_view>& error_kinds() { return detail::tables().errors; }
+
+std::optional<FromValveMessage> error_message(std::string_view kind) {
+  const std::string spelled = detail::table_spelling(kind);
+  const auto& messages = detail::tables().from_valve;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (!messages[i].error_kind.empty() && messages[i].error_kind == spelled) {
+      return detail::blank(std::type_identity<FromValveMessage>{}, i);
+    }
+  }
+  return std::nullopt;
+}
+
+std::string_view error_kind(const FromValveMessage& message) {
+  return describe(message).error_kind;
+}
+
+Status set_field(ToValveMessage& message, std::string_view field, const FieldValue& value) {
+  return detail::set_field_of(message, field, value);
+}
+
+Status set_field(FromValveMessage& message, std::string_view field, const FieldValue& value) {
+  return detail::set_field_of(message, field, value);
+}
+
+std::optional<FieldValue> field_value(const ToValveMessage& message, std::string_view field) {
+  return detail::field_value_of(message, field);
+}
+
+std::optional<FieldValue> field_value(const FromValveMessage& message, std::string_view field) {
+  return detail::field_value_of(message, field);
+}
+
+Status check_valve_limits(double closed_degrees, double opened_degrees) {
+  using detail::format_number;
+  const auto limit = [](const char* field, std::string complaint) {
+    return field_error(ErrorCode::kOutOfRange, field, std::move(complaint));
+  };
+  if (!std::isfinite(closed_degrees)) return limit("closed_degrees", "must be a number");
+  if (!std::isfinite(opened_degrees)) return limit("opened_degrees", "must be a number");
+  if (opened_degrees != kFullTurnOpenedDegrees && opened_degrees > kMaxLimitedOpenedDegrees) {
+    return limit("opened_degrees", format_number(opened_degrees) +
+                                       " is neither 360 (full turn) nor at most 340 (the sheet)");
+  }
+  if (opened_degrees == kFullTurnOpenedDegrees) {
+    if (closed_degrees < 0.0 || closed_degrees >= kFullTurnOpenedDegrees) {
+      return limit("closed_degrees", format_number(closed_degrees) + " is outside [0, 360)");
+    }
+    return {};
+  }
+  if (closed_degrees < 0.0 || closed_degrees >= opened_degrees) {
+    return limit("closed_degrees", format_number(closed_degrees) +
+                                       " must be at least 0 and below opened_degrees " +
+                                       format_number(opened_degrees));
+  }
+  return {};
 }
 
 std::string_view to_string(Direction direction) { return detail::enum_name(direction); }

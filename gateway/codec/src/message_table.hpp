@@ -1,7 +1,11 @@
 #pragma once
 
 // The protocol sheet as data: one entry per message, with the sheet's offsets (byte 0 is the
-// message id). Ranges are the sheet's; docs/protocol.md records where the sheet is silent.
+// message id), ranges, units and resolutions, which reply answers which request, and which
+// messages are run commands, telemetry requests and errors. Ranges are the sheet's;
+// docs/protocol.md records where the sheet is silent. Everything else reads these facts through
+// teejet/codec/table.hpp; a message added here (and to the variants of messages.hpp) is known
+// to every tool by its name.
 
 #include "wire.hpp"
 
@@ -9,18 +13,19 @@ namespace teejet::codec::detail {
 
 // ---- Field kinds with the sheet's ranges ----------------------------------------------------
 
-inline constexpr UnsignedField kSpeedPercent{1, 100};
-inline constexpr UnsignedField kResendTenths{1, 0xFF};
-inline constexpr UnsignedField kMilliseconds{2, 0xFFFF};
+inline constexpr UnsignedField kSpeedPercent{1, 100, "%"};
+inline constexpr UnsignedField kResendTenths{1, 0xFF, "0.1 s"};
+inline constexpr UnsignedField kMilliseconds{2, 0xFFFF, "ms"};
 inline constexpr UnsignedField kPartNumber{3, 0xFFFFFF};
-inline constexpr UnsignedField kCounter32{4, 0xFFFFFFFF};
-inline constexpr UnsignedField kDegreesPerSecond{2, 359};
-inline constexpr ScaledField kTenthsOfDegree{2, 10.0, 3599};  // 0.0 .. 359.9
-inline constexpr ScaledField kSupplyVolts{2, 10.0, 165};      // 0.0 .. 16.5
-inline constexpr ScaledField kErrorVolts{2, 10.0, 0xFFFF};    // errors may exceed the supply range
-inline constexpr ScaledField kAmps{2, 100.0, 0xFFFF};         // 0.00 .. 655.35
-inline constexpr SignedByteField kCelsius{-127, 127};
-inline constexpr SignedByteField kErrorCelsius{0, 127};
+inline constexpr UnsignedField kSeconds32{4, 0xFFFFFFFF, "s"};
+inline constexpr UnsignedField kCount32{4, 0xFFFFFFFF};
+inline constexpr UnsignedField kDegreesPerSecond{2, 359, "°/s"};
+inline constexpr ScaledField kTenthsOfDegree{2, 10.0, 3599, "°"};  // 0.0 .. 359.9
+inline constexpr ScaledField kSupplyVolts{2, 10.0, 165, "V"};      // 0.0 .. 16.5
+inline constexpr ScaledField kErrorVolts{2, 10.0, 0xFFFF, "V"};    // errors may exceed the supply
+inline constexpr ScaledField kAmps{2, 100.0, 0xFFFF, "A"};         // 0.00 .. 655.35
+inline constexpr SignedByteField kCelsius{-127, 127, "°C"};
+inline constexpr SignedByteField kErrorCelsius{0, 127, "°C"};
 inline constexpr SerialField kSerial{};
 inline constexpr FlagField kBootMode{};
 inline constexpr VersionField kVersion{};
@@ -81,19 +86,20 @@ constexpr auto spec(std::type_identity<SpeedDirection>) {
 }
 
 constexpr auto spec(std::type_identity<RunTime>) {
-  return message<RunTime>(0x08, "run_time", field("seconds", 1, &RunTime::seconds, kCounter32));
+  return message<RunTime>(0x08, "run_time", field("seconds", 1, &RunTime::seconds, kSeconds32));
 }
 
 // The sheet labels this field "Run Time Seconds"; its byte table says Cycle Counts.
 constexpr auto spec(std::type_identity<CycleCounts>) {
   return message<CycleCounts>(0x09, "cycle_counts",
-                              field("count", 1, &CycleCounts::count, kCounter32));
+                              field("count", 1, &CycleCounts::count, kCount32));
 }
 
 template <class Error>
 constexpr auto voltage_error(std::string_view name) {
   return message<Error>(Error::kId, name, field("volts", 1, &Error::volts, kErrorVolts),
-                        field("limit_volts", 3, &Error::limit_volts, kErrorVolts));
+                        field("limit_volts", 3, &Error::limit_volts, kErrorVolts))
+      .reports_error();
 }
 constexpr auto spec(std::type_identity<HighVoltageError>) {
   return voltage_error<HighVoltageError>("high_voltage_error");  // 0x10
@@ -105,7 +111,8 @@ constexpr auto spec(std::type_identity<LowVoltageError>) {
 template <class Error>
 constexpr auto current_error(std::string_view name) {
   return message<Error>(Error::kId, name, field("amps", 1, &Error::amps, kAmps),
-                        field("limit_amps", 3, &Error::limit_amps, kAmps));
+                        field("limit_amps", 3, &Error::limit_amps, kAmps))
+      .reports_error();
 }
 constexpr auto spec(std::type_identity<HighCurrentError>) {
   return current_error<HighCurrentError>("high_current_error");  // 0x12
@@ -118,7 +125,8 @@ constexpr auto spec(std::type_identity<HighTemperatureError>) {
   using M = HighTemperatureError;
   return message<M>(0x14, "high_temperature_error",
                     field("temperature_c", 1, &M::temperature_c, kErrorCelsius),
-                    field("limit_c", 2, &M::limit_c, kErrorCelsius));
+                    field("limit_c", 2, &M::limit_c, kErrorCelsius))
+      .reports_error();
 }
 
 constexpr auto spec(std::type_identity<MinDegreesPerSecondError>) {
@@ -126,7 +134,8 @@ constexpr auto spec(std::type_identity<MinDegreesPerSecondError>) {
   return message<M>(0x15, "min_degrees_per_second_error",
                     field("dps", 1, &M::dps, kDegreesPerSecond),
                     field("limit_dps", 3, &M::limit_dps, kDegreesPerSecond),
-                    field("direction", 5, &M::direction, kDirection));
+                    field("direction", 5, &M::direction, kDirection))
+      .reports_error();
 }
 
 constexpr auto spec(std::type_identity<BaudRateReply>) {
@@ -182,14 +191,17 @@ constexpr auto spec(std::type_identity<MillisecondsToRun>) {
 }
 
 constexpr auto spec(std::type_identity<RequestVersion>) {
-  return message<RequestVersion>(0x10, "request_version").answered_by(kReplyId<VersionInfo>);
+  return message<RequestVersion>(0x10, "request_version")
+      .answered_by(kReplyId<VersionInfo>)
+      .asks_for_telemetry();
 }
 
 template <class Request, class Reply>
 constexpr auto telemetry_request(std::string_view name) {
   return message<Request>(Request::kId, name,
                           field("resend_tenths", 1, &Request::resend_tenths, kResendTenths))
-      .answered_by(kReplyId<Reply>);
+      .answered_by(kReplyId<Reply>)
+      .asks_for_telemetry();
 }
 
 constexpr auto spec(std::type_identity<RequestPosition>) {

@@ -1,9 +1,10 @@
 #pragma once
 
-// Field codecs: how one field of a message sits on the wire. Each kind knows its width, how to
-// encode a typed member (refusing values outside the sheet's range), how to decode it (accepting
-// whatever the wire says, unless the byte is not a defined value of an enumeration) and how to
-// present it to people. Messages are assembled from these in message_table.hpp.
+// Field codecs: how one field of a message sits on the wire. Each kind knows its width, its unit,
+// range and resolution (info()), how to encode a typed member (refusing values outside the
+// sheet's range), how to decode it (accepting whatever the wire says, unless the byte is not a
+// defined value of an enumeration), how to present it to people and how to set it from what
+// people give (assign()). Messages are assembled from these in message_table.hpp.
 
 #include <algorithm>
 #include <array>
@@ -17,8 +18,10 @@
 #include <tuple>
 #include <type_traits>
 #include <utility>
+#include <variant>
 
 #include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::codec::detail {
 
@@ -44,9 +47,44 @@ inline void write_be(MutableBytes out, std::size_t offset, std::size_t width, st
 }
 
 inline Error out_of_range(std::string_view field, double value, double min, double max) {
-  return Error{ErrorCode::kOutOfRange, std::string(field) + " " + format_number(value) +
-                                           " is outside " + format_number(min) + " to " +
-                                           format_number(max)};
+  return field_error(
+      ErrorCode::kOutOfRange, std::string(field),
+      format_number(value) + " is outside " + format_number(min) + " to " + format_number(max));
+}
+
+inline Error invalid_field(std::string_view field, std::string complaint) {
+  return field_error(ErrorCode::kInvalidValue, std::string(field), std::move(complaint));
+}
+
+// What people give for a field, as a number: an integer or a double; nullopt otherwise.
+inline std::optional<double> number_of(const FieldValue& value) {
+  if (const auto* integer = std::get_if<std::int64_t>(&value)) return static_cast<double>(*integer);
+  if (const auto* real = std::get_if<double>(&value)) return *real;
+  return std::nullopt;
+}
+
+inline std::string describe_value(const FieldValue& value) {
+  return std::visit(
+      [](const auto& v) -> std::string {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::string>) return "\"" + v + "\"";
+        if constexpr (std::is_same_v<V, bool>) return v ? "true" : "false";
+        if constexpr (std::is_same_v<V, double>) return format_number(v);
+        if constexpr (std::is_same_v<V, std::int64_t>) return std::to_string(v);
+      },
+      value);
+}
+
+// A whole number from `min` to `max`, as an integer field takes it.
+inline Result<double> whole_number(std::string_view field, const FieldValue& value, double min,
+                                   double max) {
+  const auto number = number_of(value);
+  if (!number) return invalid_field(field, describe_value(value) + " is not a number");
+  if (!std::isfinite(*number) || *number != std::floor(*number)) {
+    return invalid_field(field, format_number(*number) + " is not a whole number");
+  }
+  if (*number < min || *number > max) return out_of_range(field, *number, min, max);
+  return *number;
 }
 
 // ---- Enumerations: the wire value is the enumerator's underlying value ----------------------
@@ -92,7 +130,18 @@ constexpr const EnumEntry<E>* find_enum(std::uint8_t wire) {
 struct UnsignedField {
   std::size_t width;
   std::uint32_t max;
+  std::string_view unit = {};
 
+  FieldInfo info() const {
+    return {.width = width, .unit = unit, .min = 0, .max = static_cast<double>(max)};
+  }
+  template <class M>
+  FieldError assign(std::string_view name, const FieldValue& value, M& member) const {
+    const auto number = whole_number(name, value, 0, max);
+    if (!number) return number.error();
+    member = static_cast<M>(*number);
+    return std::nullopt;
+  }
   template <class M>
   FieldError encode(std::string_view name, const M& value, MutableBytes out,
                     std::size_t offset) const {
@@ -117,6 +166,23 @@ struct ScaledField {
   std::size_t width;
   double divisor;
   std::uint32_t max_raw;
+  std::string_view unit = {};
+
+  FieldInfo info() const {
+    return {.width = width,
+            .unit = unit,
+            .min = 0,
+            .max = max_raw / divisor,
+            .resolution = 1.0 / divisor};
+  }
+  FieldError assign(std::string_view name, const FieldValue& value, double& member) const {
+    const auto number = number_of(value);
+    if (!number) return invalid_field(name, describe_value(value) + " is not a number");
+    std::array<std::uint8_t, 8> scratch{};
+    if (auto failure = encode(name, *number, scratch, 0)) return failure;
+    member = *number;
+    return std::nullopt;
+  }
 
   FieldError encode(std::string_view name, double value, MutableBytes out,
                     std::size_t offset) const {
@@ -139,6 +205,17 @@ struct SignedByteField {
   static constexpr std::size_t width = 1;
   int min;
   int max;
+  std::string_view unit = {};
+
+  FieldInfo info() const {
+    return {.width = width, .unit = unit, .min = double(min), .max = double(max)};
+  }
+  FieldError assign(std::string_view name, const FieldValue& value, int& member) const {
+    const auto number = whole_number(name, value, min, max);
+    if (!number) return number.error();
+    member = static_cast<int>(*number);
+    return std::nullopt;
+  }
 
   FieldError encode(std::string_view name, int value, MutableBytes out, std::size_t offset) const {
     if (value < min || value > max) return out_of_range(name, value, min, max);
@@ -157,6 +234,20 @@ struct SerialField {
   static constexpr std::size_t width = 3;
   UnsignedField bits{width, 0xFFFFFF};
 
+  FieldInfo info() const {
+    return {.width = width, .type = FieldType::kSerial, .min = 0, .max = 0xFFFFFF};
+  }
+  FieldError assign(std::string_view name, const FieldValue& value, std::uint32_t& member) const {
+    if (const auto* text = std::get_if<std::string>(&value)) {
+      const auto serial = parse_serial(*text);
+      if (!serial)
+        return field_error(serial.error().code, std::string(name), serial.error().reason);
+      member = *serial;
+      return std::nullopt;
+    }
+    return bits.assign(name, value, member);
+  }
+
   FieldError encode(std::string_view name, std::uint32_t value, MutableBytes out,
                     std::size_t offset) const {
     return bits.encode(name, value, out, offset);
@@ -172,14 +263,22 @@ struct SerialField {
 struct FlagField {
   static constexpr std::size_t width = 1;
 
+  FieldInfo info() const { return {.width = width, .type = FieldType::kFlag, .max = 1}; }
+  FieldError assign(std::string_view name, const FieldValue& value, bool& member) const {
+    const auto* flag = std::get_if<bool>(&value);
+    if (flag == nullptr)
+      return invalid_field(name, describe_value(value) + " is neither true nor false");
+    member = *flag;
+    return std::nullopt;
+  }
+
   FieldError encode(std::string_view, bool value, MutableBytes out, std::size_t offset) const {
     out[offset] = value ? 1 : 0;
     return std::nullopt;
   }
   FieldError decode(std::string_view name, Bytes in, std::size_t offset, bool& value) const {
     if (in[offset] > 1) {
-      return Error{ErrorCode::kInvalidValue,
-                   std::string(name) + " byte " + hex_byte(in[offset]) + " is neither 0 nor 1"};
+      return invalid_field(name, "byte " + hex_byte(in[offset]) + " is neither 0 nor 1");
     }
     value = in[offset] == 1;
     return std::nullopt;
@@ -191,11 +290,28 @@ struct FlagField {
 struct BitRateField {
   static constexpr std::size_t width = 1;
 
+  FieldInfo info() const {
+    return {.width = width,
+            .unit = "bit/s",
+            .min = kBitRate250k,
+            .max = kBitRate500k,
+            .values = {kBitRate250k, kBitRate500k}};
+  }
+  FieldError assign(std::string_view name, const FieldValue& value, std::uint32_t& member) const {
+    const auto number = whole_number(name, value, 0, 0xFFFFFFFF);
+    if (!number) return number.error();
+    std::array<std::uint8_t, 8> scratch{};
+    if (auto failure = encode(name, static_cast<std::uint32_t>(*number), scratch, 0))
+      return failure;
+    member = static_cast<std::uint32_t>(*number);
+    return std::nullopt;
+  }
+
   FieldError encode(std::string_view name, std::uint32_t value, MutableBytes out,
                     std::size_t offset) const {
     if (value != kBitRate250k && value != kBitRate500k) {
-      return Error{ErrorCode::kOutOfRange, std::string(name) + " " + std::to_string(value) +
-                                               " is neither 250000 nor 500000"};
+      return field_error(ErrorCode::kOutOfRange, std::string(name),
+                         std::to_string(value) + " is neither 250000 nor 500000");
     }
     out[offset] = value == kBitRate500k ? 1 : 0;
     return std::nullopt;
@@ -203,8 +319,8 @@ struct BitRateField {
   FieldError decode(std::string_view name, Bytes in, std::size_t offset,
                     std::uint32_t& value) const {
     if (in[offset] > 1) {
-      return Error{ErrorCode::kInvalidValue, std::string(name) + " code " + hex_byte(in[offset]) +
-                                                 " is neither 0 (250k) nor 1 (500k)"};
+      return invalid_field(name,
+                           "code " + hex_byte(in[offset]) + " is neither 0 (250k) nor 1 (500k)");
     }
     value = in[offset] == 1 ? kBitRate500k : kBitRate250k;
     return std::nullopt;
@@ -216,11 +332,23 @@ struct BitRateField {
 struct VersionField {
   static constexpr std::size_t width = 3;
 
+  FieldInfo info() const { return {.width = width, .type = FieldType::kVersion}; }
+  FieldError assign(std::string_view name, const FieldValue& value, SoftwareVersion& member) const {
+    const auto* text = std::get_if<std::string>(&value);
+    if (text == nullptr)
+      return invalid_field(name, describe_value(value) + " is not a version like 1.02e");
+    const auto version = parse_version(*text);
+    if (!version)
+      return field_error(version.error().code, std::string(name), version.error().reason);
+    member = *version;
+    return std::nullopt;
+  }
+
   FieldError encode(std::string_view name, const SoftwareVersion& value, MutableBytes out,
                     std::size_t offset) const {
     if (value.major > 0xFF || value.minor > 0xFF) {
-      return Error{ErrorCode::kOutOfRange,
-                   std::string(name) + " " + format_version(value) + " has a part above 255"};
+      return field_error(ErrorCode::kOutOfRange, std::string(name),
+                         format_version(value) + " has a part above 255");
     }
     out[offset] = static_cast<std::uint8_t>(value.major);
     out[offset + 1] = static_cast<std::uint8_t>(value.minor);
@@ -240,11 +368,31 @@ struct EnumField {
   static constexpr std::size_t width = 1;
   ErrorCode invalid = ErrorCode::kInvalidValue;
 
+  FieldInfo info() const {
+    FieldInfo field{.width = width, .type = FieldType::kWord};
+    for (const auto& entry : kEntries<E>) field.words.push_back(entry.name);
+    return field;
+  }
+  FieldError assign(std::string_view name, const FieldValue& value, E& member) const {
+    if (const auto* word = std::get_if<std::string>(&value)) {
+      for (const auto& entry : kEntries<E>) {
+        if (entry.name == *word) {
+          member = entry.value;
+          return std::nullopt;
+        }
+      }
+    }
+    std::string words;
+    for (const auto& entry : kEntries<E>)
+      words += (words.empty() ? "" : ", ") + std::string(entry.name);
+    return invalid_field(name, describe_value(value) + " is not one of " + words);
+  }
+
   FieldError encode(std::string_view name, E value, MutableBytes out, std::size_t offset) const {
     const auto wire = static_cast<std::uint8_t>(value);
     if (find_enum<E>(wire) == nullptr) {
-      return Error{ErrorCode::kOutOfRange,
-                   std::string(name) + " " + hex_byte(wire) + " is not a defined value"};
+      return field_error(ErrorCode::kOutOfRange, std::string(name),
+                         hex_byte(wire) + " is not a defined value");
     }
     out[offset] = wire;
     return std::nullopt;
@@ -252,8 +400,8 @@ struct EnumField {
   FieldError decode(std::string_view name, Bytes in, std::size_t offset, E& value) const {
     const auto* entry = find_enum<E>(in[offset]);
     if (entry == nullptr) {
-      return Error{invalid,
-                   std::string(name) + " byte " + hex_byte(in[offset]) + " is not a defined value"};
+      return field_error(invalid, std::string(name),
+                         "byte " + hex_byte(in[offset]) + " is not a defined value");
     }
     value = entry->value;
     return std::nullopt;
@@ -280,6 +428,15 @@ struct Field {
   void visit(const Msg& msg, const FieldVisitor& visitor) const {
     visitor(name, kind.present(msg.*member));
   }
+  FieldInfo info() const {
+    FieldInfo field = kind.info();
+    field.name = name;
+    field.offset = offset;
+    return field;
+  }
+  FieldError assign(Msg& msg, const FieldValue& value) const {
+    return kind.assign(name, value, msg.*member);
+  }
 };
 
 // A byte with one valid value and no member (the 0xA5 of CAN Baud Rate Reply).
@@ -296,10 +453,21 @@ struct MarkerByte {
   }
   FieldError decode(Bytes in, Msg&) const {
     if (in[offset] == value) return std::nullopt;
-    return Error{ErrorCode::kInvalidMarker, std::string(name) + " byte " + hex_byte(in[offset]) +
-                                                " is not " + hex_byte(value)};
+    return field_error(ErrorCode::kInvalidMarker, std::string(name),
+                       "byte " + hex_byte(in[offset]) + " is not " + hex_byte(value));
   }
   void visit(const Msg&, const FieldVisitor&) const {}
+  FieldInfo info() const {
+    return {.name = name,
+            .offset = offset,
+            .width = 1,
+            .type = FieldType::kMarker,
+            .min = double(value),
+            .max = double(value)};
+  }
+  FieldError assign(Msg&, const FieldValue&) const {
+    return invalid_field(name, "is fixed to " + hex_byte(value));
+  }
 };
 
 // One message: its id, its name and its fields at their offsets.
@@ -311,6 +479,9 @@ struct MessageSpec {
   // Controller to valve only: what the message makes the valve do.
   bool run_command = false;             // replaces what the valve was doing (sheet, note 5)
   std::optional<std::uint8_t> reply{};  // the valve-to-controller message that answers it
+  bool telemetry_request = false;       // asks for a value the valve measures or counts
+  // Valve to controller only.
+  bool error = false;  // one of the error messages
 
   constexpr MessageSpec runs() const {
     MessageSpec spec = *this;
@@ -320,6 +491,16 @@ struct MessageSpec {
   constexpr MessageSpec answered_by(std::uint8_t reply_id) const {
     MessageSpec spec = *this;
     spec.reply = reply_id;
+    return spec;
+  }
+  constexpr MessageSpec asks_for_telemetry() const {
+    MessageSpec spec = *this;
+    spec.telemetry_request = true;
+    return spec;
+  }
+  constexpr MessageSpec reports_error() const {
+    MessageSpec spec = *this;
+    spec.error = true;
     return spec;
   }
 

@@ -32,4 +32,17 @@ const char* to_string(ErrorCode code) {
   return "unknown error";
 }
 
+Error field_error(ErrorCode code, std::string field, std::string complaint) {
+  std::string reason = field + " " + complaint;
+  return Error{.code = code,
+               .reason = std::move(reason),
+               .field = std::move(field),
+               .complaint = std::move(complaint)};
+}
+
+Error in_context(std::string_view context, Error error) {
+  error.reason = std::string(context) + ": " + error.reason;
+  return error;
+}
+
 }  // namespace teejet

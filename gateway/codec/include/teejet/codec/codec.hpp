@@ -88,6 +88,8 @@ Result<std::uint32_t> parse_serial(std::string_view text);
 // {1, 2, 'e'} -> "1.02e"; {1, 2, 0} -> "1.02". The minor number has at least two digits; a
 // test character that is not printable ASCII shows as its byte: {1, 2, 0x80} -> "1.02[0x80]".
 std::string format_version(const SoftwareVersion& version);
+// The inverse: "1.02e" -> {1, 2, 'e'}, "1.02" -> {1, 2, 0}; major and minor 0 to 255.
+Result<SoftwareVersion> parse_version(std::string_view text);
 
 std::string_view to_string(Direction direction);        // "open" / "close"
 std::string_view to_string(TargetDirection direction);  // "open" / "close" / "shortest"

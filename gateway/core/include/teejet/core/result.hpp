@@ -4,6 +4,7 @@
 // gateway throws across a layer boundary; bad input and failed system calls come back as Errors.
 
 #include <string>
+#include <string_view>
 #include <utility>
 #include <variant>
 
@@ -32,7 +33,19 @@ struct Error {
   ErrorCode code = ErrorCode::kInvalidValue;
   std::string reason;  // for people: names the thing, the offending value and what is allowed
   int os_error = 0;    // errno for kSystem (and link faults), 0 otherwise
+  // A value refused by a check: the field it is about ("speed_percent") and what is wrong with
+  // the value ("101 is outside 0 to 100"), so that a caller can name the field its own way
+  // (valvectl says --speed) without taking `reason` apart. Empty for other errors.
+  std::string field;
+  std::string complaint;
 };
+
+// An Error about one field's value, for people "<field> <complaint>".
+Error field_error(ErrorCode code, std::string field, std::string complaint);
+
+// `error` said in a context, "<context>: <reason>" ("manual: speed_percent 101 is outside 0 to
+// 100"); its field and complaint stay as they are.
+Error in_context(std::string_view context, Error error);
 
 // Either a value or an Error, in the manner of C++23's std::expected.
 template <class T>
