@@ -92,3 +92,21 @@ replace_checked("${DIR}/${NAME}PubSubTypes.cxx"
 #    operator==(T, const ReturnCode_t&), which clang (C++20) rejects as ambiguous.
 replace_checked("${DIR}/${NAME}TypeObject.h" "\n#include <fastrtps/types/TypeObject.h>\n"
                 "\n#include <fastcdr/Cdr.h>\n#include <fastrtps/types/TypeObject.h>\n" 1)
+
+# 4. The type support of each type, found from the type (fastddsgen names it <Type>PubSubType and
+#    says so nowhere a template can read): code generic over the types (topics, writers, readers,
+#    the recorder's catalog) needs no line per type.
+file(READ "${DIR}/${NAME}PubSubTypes.h" text)
+string(REGEX MATCHALL "class [A-Za-z0-9_]+PubSubType : public eprosima::fastdds::dds::TopicDataType"
+       declared "${text}")
+if(NOT declared)
+  message(FATAL_ERROR "${DIR}/${NAME}PubSubTypes.h: no <Type>PubSubType class; fastddsgen output changed")
+endif()
+set(traits "\n// Added by idl/patch_generated.cmake: each type's type support, for generic code.\nnamespace teejet\n{\n    template <class Type>\n    struct PubSubTypeOf;\n")
+foreach(declaration ${declared})
+  string(REGEX REPLACE "class ([A-Za-z0-9_]+)PubSubType : .*" "\\1" type "${declaration}")
+  string(APPEND traits "    template <>\n    struct PubSubTypeOf<${type}>\n    {\n        using type = ${type}PubSubType;\n    };\n")
+endforeach()
+string(APPEND traits "}\n")
+replace_checked("${DIR}/${NAME}PubSubTypes.h" "(\n#endif // _FAST_DDS_GENERATED_[A-Z0-9_]+_PUBSUBTYPES_H_)"
+                "${traits}\\1" 1)

@@ -16,12 +16,11 @@ namespace fdds = eprosima::fastdds::dds;
 
 inline constexpr std::chrono::seconds kDiscoveryTimeout{20};
 
-// A reader (writer) of Sample's topic (dds::topics::TopicOf), registering the topic on first use.
+// A reader (writer) of Sample's topic (dds::topics::topic_of), registering the topic on first use.
 template <class Sample>
 Result<fdds::DataReader*> open_reader(dds::Participant& participant, const fdds::DataReaderQos& qos,
                                       fdds::DataReaderListener* listener = nullptr) {
-  using Of = dds::topics::TopicOf<Sample>;
-  auto topic = participant.topic<typename Of::PubSubType>(Of::kName);
+  auto topic = dds::topics::topic_of<Sample>(participant);
   if (!topic) return topic.error();
   return participant.reader(*topic, qos, listener);
 }
@@ -29,8 +28,7 @@ Result<fdds::DataReader*> open_reader(dds::Participant& participant, const fdds:
 template <class Sample>
 Result<fdds::DataWriter*> open_writer(dds::Participant& participant,
                                       const fdds::DataWriterQos& qos) {
-  using Of = dds::topics::TopicOf<Sample>;
-  auto topic = participant.topic<typename Of::PubSubType>(Of::kName);
+  auto topic = dds::topics::topic_of<Sample>(participant);
   if (!topic) return topic.error();
   return participant.writer(*topic, qos);
 }

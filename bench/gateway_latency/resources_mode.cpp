@@ -96,10 +96,7 @@ class EcuReadingEverything {
     auto presence =
         open_reader<ValvePresence>(*participant_, topics::state_reader_qos(), &presence_);
     if (!presence) return presence.error();
-    if (Status counted = count_each<ValvePosition, ValveVersion, ValveTemperature, ValveVoltage,
-                                    ValveCurrent, ValveDegreesPerSecond, ValveSpeedDirection,
-                                    ValveRunTime, ValveCycleCount, ValveBaudRate, ValveError>();
-        !counted) {
+    if (Status counted = count_each(std::type_identity<dds::TelemetrySample>{}); !counted) {
       return counted;
     }
     auto status =
@@ -110,7 +107,7 @@ class EcuReadingEverything {
 
   // A counting reader per sample type, in order; && stops at the first refusal.
   template <class... Samples>
-  Status count_each() {
+  Status count_each(std::type_identity<std::variant<Samples...>>) {
     Status counted;
     (void)((counted = count<Samples>()).ok() && ...);
     return counted;

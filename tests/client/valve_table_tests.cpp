@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include "teejet/client/names.hpp"
 #include "support/valve_samples.hpp"
 #include "teejet/client/valve_table.hpp"
+#include "teejet/codec/codec.hpp"
 
 namespace teejet::client {
 namespace {
@@ -21,12 +21,12 @@ GatewayStatus gateway_status(const std::string& name, std::uint32_t known) {
 
 TEST(ValvectlTable, TelemetryBeforePresenceStaysHiddenUntilThePresenceArrives) {
   ValveTable table;
-  table.on_position(1, 12.3, 10);
+  table.on_telemetry(1, codec::Position{12.3}, 10);
   EXPECT_TRUE(table.rows().empty());
   EXPECT_FALSE(table.row(1));
   table.on_presence(presence(1, true));
   ASSERT_TRUE(table.row(1));
-  EXPECT_EQ(table.row(1)->position_degrees, 12.3);
+  EXPECT_EQ(table.row(1)->position_degrees(), 12.3);
   EXPECT_EQ(table.row(1)->address, 0xD9);
   EXPECT_EQ(table.row(1)->gateway, "gw");
 }
@@ -74,37 +74,29 @@ TEST(ValvectlTable, TelemetryIsCompleteWhenEveryOnlineValveReportedItsValues) {
   table.on_presence(presence(1, true));
   table.on_presence(presence(2, false));  // offline valves are not waited for
   EXPECT_FALSE(table.telemetry_complete());
-  table.on_position(1, 1.0, 1);
-  table.on_temperature(1, 25, 24, 1);
+  table.on_telemetry(1, codec::Position{1.0}, 1);
+  table.on_telemetry(1, codec::Temperature{25, 24}, 1);
   EXPECT_FALSE(table.telemetry_complete());
-  table.on_voltage(1, 12.0, 1);
+  table.on_telemetry(1, codec::Voltage{12.0}, 1);
   EXPECT_TRUE(table.telemetry_complete());
 }
 
-TEST(ValvectlTable, RepliesKeepTheLatestOfEachKind) {
+TEST(ValvectlTable, TelemetryKeepsTheLatestMessageOfEachSubject) {
   ValveTable table;
-  table.on_voltage(4, 12.0, 100);
-  table.on_reply(4, kBaudRateReply, {200, {{"bit_rate", 250000}}});
+  table.on_presence(presence(4, true));
+  table.on_telemetry(4, codec::Voltage{12.0}, 100);
+  table.on_telemetry(4, codec::Voltage{12.4}, 150);
+  table.on_telemetry(4, codec::BaudRateReply{250000}, 200);
+  table.on_telemetry(4, codec::HighVoltageError{17, 16.5}, 300);  // errors are no telemetry
   ASSERT_TRUE(table.reply(4, "voltage"));
-  EXPECT_EQ(table.reply(4, "voltage")->received_ns, 100u);
-  EXPECT_EQ(table.reply(4, "voltage")->values["volts"], 12.0);
-  EXPECT_EQ(table.reply(4, "baud_rate")->values["bit_rate"], 250000);
+  EXPECT_EQ(table.reply(4, "voltage")->received_ns, 150u);
+  EXPECT_EQ(table.reply(4, "voltage")->message, codec::FromValveMessage{codec::Voltage{12.4}});
+  EXPECT_EQ(table.reply(4, "baud_rate")->message,
+            codec::FromValveMessage{codec::BaudRateReply{250000}});
   EXPECT_FALSE(table.reply(4, "current"));
-  EXPECT_EQ(reply_name(TELEMETRY_CYCLE_COUNTS), "cycle_count");
-}
-
-TEST(ValvectlNames, TelemetryWordsRoundTrip) {
-  for (const Telemetry telemetry :
-       {TELEMETRY_VERSION, TELEMETRY_POSITION, TELEMETRY_TEMPERATURE, TELEMETRY_VOLTAGE,
-        TELEMETRY_CURRENT, TELEMETRY_DEGREES_PER_SECOND, TELEMETRY_SPEED_DIRECTION,
-        TELEMETRY_RUN_TIME, TELEMETRY_CYCLE_COUNTS}) {
-    EXPECT_EQ(parse_telemetry(telemetry_word(telemetry)), telemetry);
-  }
-  EXPECT_FALSE(parse_telemetry("Voltage"));
-  EXPECT_EQ(parse_direction("shortest", true), DIRECTION_SHORTEST);
-  EXPECT_FALSE(parse_direction("shortest", false));
-  EXPECT_EQ(to_string(ERROR_MIN_DEGREES_PER_SECOND), "min_degrees_per_second");
-  EXPECT_EQ(to_string(BUS_OFF), "bus_off");
+  EXPECT_EQ(table.row(4)->telemetry.size(), 2u);
+  EXPECT_EQ(table.row(4)->volts(), 12.4);
+  EXPECT_FALSE(table.row(4)->temperature_c());
 }
 
 }  // namespace

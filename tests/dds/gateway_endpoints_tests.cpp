@@ -191,13 +191,13 @@ TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
 TEST_F(GatewayEndpointsTest, EveryTelemetryTypeReachesItsTopicWithTheCanReceiveTimeAsSource) {
   DdsPeer ecu(test_domain(), "ecu");
   auto* position = ecu.reader<ValvePosition>();
-  auto* cycles = ecu.reader<ValveCycleCount>();
+  auto* cycles = ecu.reader<ValveCycleCounts>();
   ASSERT_TRUE(position && cycles);
   ValvePosition sample;
   sample.serial(4711);
   sample.degrees(42.5f);
   sample.received_ns(1'700'000'000'123'456'789);
-  ValveCycleCount count;
+  ValveCycleCounts count;
   count.serial(4711);
   count.count(99);
   count.received_ns(1'700'000'000'000'000'001);
@@ -213,7 +213,7 @@ TEST_F(GatewayEndpointsTest, EveryTelemetryTypeReachesItsTopicWithTheCanReceiveT
   EXPECT_FLOAT_EQ(positions[0].first.degrees(), 42.5f);
   EXPECT_EQ(positions[0].second.source_timestamp.seconds(), 1'700'000'000);
   EXPECT_EQ(positions[0].second.source_timestamp.nanosec(), 123'456'789u);
-  EXPECT_EQ(take_all<ValveCycleCount>(cycles).at(0).first.count(), 99u);
+  EXPECT_EQ(take_all<ValveCycleCounts>(cycles).at(0).first.count(), 99u);
 }
 
 TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {

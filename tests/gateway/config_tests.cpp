@@ -2,9 +2,9 @@
 
 #include <fstream>
 
+#include "support/eventually.hpp"
 #include "teejet/gateway/bus_backend.hpp"
 #include "teejet/gateway/config.hpp"
-#include "support/eventually.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -114,8 +114,11 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
   EXPECT_EQ(error_of("valves: {TJV12x: {opened_deg: 90}}"),
             "test.yaml:1: valves: serial 'TJV12x' is not TJV followed by digits, nor digits alone");
   EXPECT_EQ(error_of("valves: {default: {opened_deg: 350}}"),
-            "test.yaml:1: valves.default: need 0 <= closed_deg < opened_deg, opened_deg <= 340 or "
-            "= 360");
+            "test.yaml:1: valves.default.opened_deg: 350 is neither 360 (full turn) nor at most "
+            "340 (the sheet)");
+  EXPECT_EQ(error_of("valves: {default: {closed_deg: 90}}"),
+            "test.yaml:1: valves.default.closed_deg: 90 must be at least 0 and below "
+            "opened_degrees 90");
   EXPECT_EQ(error_of("gateway: {domain: 1}\ngateway: {domain: 2}\n"),
             "test.yaml:2: the file: 'gateway' is given twice");
   EXPECT_NE(error_of("gateway: [unclosed").find("test.yaml: "), std::string::npos);
@@ -160,12 +163,14 @@ TEST(GatewayConfig, SimulatedValvesMayStartWithLatchedErrors) {
   const auto config = parse(
       "simulator: {errors: [\"TJV000002:high-voltage:16.2:15.5\", \"3:min-dps:20:30:close\"]}");
   ASSERT_EQ(config.sim_errors.size(), 2u);
-  EXPECT_EQ(config.sim_errors[0],
-            (sim::SerialError{2, {sim::ErrorKind::kHighVoltage, 16.2, 15.5}}));
-  EXPECT_EQ(config.sim_errors[1].error.direction, codec::Direction::kClose);
+  EXPECT_EQ(config.sim_errors[0], (sim::SerialError{2, codec::HighVoltageError{16.2, 15.5}}));
+  EXPECT_EQ(
+      config.sim_errors[1].error,
+      (sim::InjectedError{codec::MinDegreesPerSecondError{20, 30, codec::Direction::kClose}}));
   EXPECT_EQ(error_of("simulator: {errors: [\"2:sparks:1:2\"]}"),
             "test.yaml:1: simulator.errors: '2:sparks:1:2': unknown error kind 'sparks' "
-            "(high-voltage, low-voltage, high-current, low-current, high-temperature, min-dps)");
+            "(high_voltage, low_voltage, high_current, low_current, high_temperature, "
+            "min_degrees_per_second)");
   EXPECT_EQ(error_of("simulator: {errors: TJV000002}"),
             "test.yaml:1: simulator.errors: expected a list of errors "
             "(SERIAL:KIND:VALUE:LIMIT[:DIRECTION])");

@@ -83,7 +83,7 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
   auto gateway_owner = make_gateway(sim_config("gw-telemetry", 1));
   Gateway& gateway = *gateway_owner;
   start(gateway, 1);
-  ASSERT_TRUE(gateway.simulator()->inject_error(1, {sim::ErrorKind::kHighVoltage, 17.2, 16.5}));
+  ASSERT_TRUE(gateway.simulator()->inject_error(1, codec::HighVoltageError{17.2, 16.5}));
   Ecu ecu(test_domain(), "test-ecu");
   auto* version = ecu.reader<ValveVersion>();
   auto* position = ecu.reader<ValvePosition>();
@@ -93,7 +93,7 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
   auto* dps = ecu.reader<ValveDegreesPerSecond>();
   auto* speed = ecu.reader<ValveSpeedDirection>();
   auto* run_time = ecu.reader<ValveRunTime>();
-  auto* cycles = ecu.reader<ValveCycleCount>();
+  auto* cycles = ecu.reader<ValveCycleCounts>();
   auto* errors = ecu.reader<ValveError>();
   auto* baud = ecu.reader<ValveBaudRate>();
   auto* status = ecu.reader<GatewayStatus>();
@@ -110,7 +110,7 @@ TEST_F(GatewayE2E, EveryTelemetryTopicCarriesEngineeringUnits) {
   std::map<std::uint32_t, ValveDegreesPerSecond> speeds;
   std::map<std::uint32_t, ValveSpeedDirection> directions;
   std::map<std::uint32_t, ValveRunTime> run_times;
-  std::map<std::uint32_t, ValveCycleCount> cycle_counts;
+  std::map<std::uint32_t, ValveCycleCounts> cycle_counts;
   std::map<std::uint32_t, ValveError> error_samples;
   std::map<std::uint32_t, ValveBaudRate> baud_rates;
   ASSERT_TRUE(eventually(

@@ -171,7 +171,7 @@ TEST_F(CycloneInterop, EveryTelemetryTopicArrivesInEngineeringUnits) {
   const auto speed =
       ecu_.state_reader(teejet_ValveSpeedDirection_desc, "teejet/valve/speed_direction");
   const auto run_time = ecu_.state_reader(teejet_ValveRunTime_desc, "teejet/valve/run_time");
-  const auto cycles = ecu_.state_reader(teejet_ValveCycleCount_desc, "teejet/valve/cycle_count");
+  const auto cycles = ecu_.state_reader(teejet_ValveCycleCounts_desc, "teejet/valve/cycle_counts");
   const auto baud = ecu_.state_reader(teejet_ValveBaudRate_desc, "teejet/valve/baud_rate");
   const auto errors = ecu_.state_reader(teejet_ValveError_desc, "teejet/valve/error");
   const auto status = ecu_.state_reader(teejet_GatewayStatus_desc, "teejet/gateway/status");
@@ -186,7 +186,7 @@ TEST_F(CycloneInterop, EveryTelemetryTopicArrivesInEngineeringUnits) {
   std::map<std::uint32_t, teejet_ValveDegreesPerSecond> speeds;
   std::map<std::uint32_t, teejet_ValveSpeedDirection> directions;
   std::map<std::uint32_t, teejet_ValveRunTime> run_times;
-  std::map<std::uint32_t, teejet_ValveCycleCount> cycle_counts;
+  std::map<std::uint32_t, teejet_ValveCycleCounts> cycle_counts;
   std::map<std::uint32_t, teejet_ValveBaudRate> baud_rates;
   ASSERT_TRUE(eventually(
       [&] {

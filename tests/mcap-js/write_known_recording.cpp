@@ -65,7 +65,7 @@ const std::string k64 = kLongest;
 // The DDS serialized payload as a DataWriter sends it: encapsulation header, then CDR.
 template <class Sample>
 Bytes serialize(Sample sample) {
-  typename teejet::dds::topics::TopicOf<Sample>::PubSubType type;
+  typename teejet::PubSubTypeOf<Sample>::type type;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&sample)());
   if (!type.serialize(&sample, &payload)) {
     fail(std::string("fastddsgen could not serialize a ") + type.getName());
@@ -211,7 +211,7 @@ Sample run_time(std::uint32_t serial, std::uint32_t seconds, std::uint64_t ns) {
 }
 
 Sample cycles(std::uint32_t serial, std::uint32_t count, std::uint64_t ns) {
-  teejet::ValveCycleCount s;
+  teejet::ValveCycleCounts s;
   s.serial(serial);
   s.count(count);
   s.received_ns(ns);
@@ -374,7 +374,7 @@ std::vector<ChannelSpec> known_channels() {
   constexpr std::uint32_t kB = 0xFFFFFF;  // the largest 24-bit serial
   constexpr std::uint32_t kC = 1;
   std::vector<ChannelSpec> channels;
-  auto add = [&](const char* topic, const char* type, std::vector<Sample> samples,
+  auto add = [&](const std::string& topic, const char* type, std::vector<Sample> samples,
                  bool is_disposed = false) {
     const std::string name = is_disposed ? std::string(topic) + "/disposed" : std::string(topic);
     channels.push_back({name, std::string("teejet::") + type,
@@ -387,35 +387,35 @@ std::vector<ChannelSpec> known_channels() {
        presence(kC, 0xE0, true, 0xFFFFFF, false, 0xFFFFFFFFFFFFFFFFULL, "")});
   // Offline: the gateway disposes the instance; the sample carries its key only.
   add(topics::kPresence, "ValvePresence", {presence(kB, 0, false, 0, false, 0, "")}, true);
-  add(topics::kVersion, "ValveVersion",
+  add(topics::topic_name<ValveVersion>(), "ValveVersion",
       {version(kA, software(1, 2, 'e'), software(0, 9, '\0'), kBase + 2),
        version(kB, software(255, 0, 'z'), software(3, 14, 'a'), kAbove53 + 2)});
-  add(topics::kPosition, "ValvePosition",
+  add(topics::topic_name<teejet::ValvePosition>(), "ValvePosition",
       {position(kA, 12.3F, kBase + 3), position(kB, 359.9F, kBase + 4),
        position(kC, 0.0F, kAbove53 + 4), position(kA, 0.1F, kBase + 5)});
-  add(topics::kTemperature, "ValveTemperature",
+  add(topics::topic_name<ValveTemperature>(), "ValveTemperature",
       {temperature(kA, -40, 85, kBase + 6), temperature(kB, -127, -1, kBase + 7),
        temperature(kC, 127, 0, kAbove53 + 7)});
-  add(topics::kVoltage, "ValveVoltage",
+  add(topics::topic_name<ValveVoltage>(), "ValveVoltage",
       {voltage(kA, 12.6F, kBase + 8), voltage(kB, 16.5F, kBase + 9),
        voltage(kC, 9.7F, kBase + 10)});
-  add(topics::kCurrent, "ValveCurrent",
+  add(topics::topic_name<ValveCurrent>(), "ValveCurrent",
       {current(kA, 1.23F, 0.45F, kBase + 11), current(kB, 0.0F, 0.0F, kBase + 12),
        current(kC, 2.55F, 2.01F, kBase + 13)});
-  add(topics::kDegreesPerSecond, "ValveDegreesPerSecond",
+  add(topics::topic_name<ValveDegreesPerSecond>(), "ValveDegreesPerSecond",
       {dps(kA, 359, DIRECTION_OPEN, kBase + 14), dps(kB, 0, DIRECTION_CLOSE, kBase + 15),
        dps(kC, 90, DIRECTION_SHORTEST, kBase + 16)});
-  add(topics::kSpeedDirection, "ValveSpeedDirection",
+  add(topics::topic_name<ValveSpeedDirection>(), "ValveSpeedDirection",
       {speed(kA, 100, DIRECTION_CLOSE, ROTATION_CLOCKWISE, kBase + 17),
        speed(kB, 0, DIRECTION_OPEN, ROTATION_COUNTERCLOCKWISE, kBase + 18),
        speed(kC, 55, DIRECTION_OPEN, ROTATION_CLOCKWISE, kBase + 19)});
-  add(topics::kRunTime, "ValveRunTime",
+  add(topics::topic_name<ValveRunTime>(), "ValveRunTime",
       {run_time(kA, 4294967295U, kBase + 20), run_time(kB, 12345, kBase + 21),
        run_time(kC, 0, kBase + 22)});
-  add(topics::kCycleCount, "ValveCycleCount",
+  add(topics::topic_name<ValveCycleCounts>(), "ValveCycleCounts",
       {cycles(kA, 7, kBase + 23), cycles(kB, 123456, kBase + 24),
        cycles(kC, 3000000000U, kBase + 25)});
-  add(topics::kBaudRate, "ValveBaudRate",
+  add(topics::topic_name<ValveBaudRate>(), "ValveBaudRate",
       {baud(kA, 250000, kBase + 26), baud(kB, 500000, kBase + 27)});
   add(topics::kError, "ValveError",
       {error(kA, ERROR_HIGH_VOLTAGE, 16.9F, 16.5F, DIRECTION_CLOSE, kBase + 28),
@@ -561,16 +561,16 @@ int main(int argc, char** argv) {
   write_text(dir + "/known.json", expected.dump(1) + "\n");
 
   // A schema name that valve.idl does not define: the channel cannot be decoded.
-  std::vector<ChannelSpec> unknown = {{topics::kPosition,
+  std::vector<ChannelSpec> unknown = {{topics::topic_name<teejet::ValvePosition>(),
                                        "teejet::NoSuchType",
-                                       live(topics::kPosition),
+                                       live(topics::topic_name<teejet::ValvePosition>()),
                                        {position(7, 1.5F, kBase)}}};
   write_file(dir + "/unknown-schema.mcap", "zstd", idl, unknown, interleave(unknown));
 
   // The second message stops after its serial: the float and the stamp are missing.
-  std::vector<ChannelSpec> cut = {{topics::kPosition,
+  std::vector<ChannelSpec> cut = {{topics::topic_name<teejet::ValvePosition>(),
                                    "teejet::ValvePosition",
-                                   live(topics::kPosition),
+                                   live(topics::topic_name<teejet::ValvePosition>()),
                                    {position(7, 1.5F, kBase), position(8, 2.5F, kBase)}}};
   cut[0].samples[1].payload.resize(4 + 4);
   write_file(dir + "/undecodable.mcap", "lz4", idl, cut, interleave(cut));

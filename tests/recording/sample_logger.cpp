@@ -81,7 +81,7 @@ json fields(const teejet::ValveSpeedDirection& s) {
 json fields(const teejet::ValveRunTime& s) {
   return {{"serial", s.serial()}, {"seconds", s.seconds()}, {"received_ns", u64(s.received_ns())}};
 }
-json fields(const teejet::ValveCycleCount& s) {
+json fields(const teejet::ValveCycleCounts& s) {
   return {{"serial", s.serial()}, {"count", s.count()}, {"received_ns", u64(s.received_ns())}};
 }
 json fields(const teejet::ValveBaudRate& s) {
@@ -163,7 +163,7 @@ class TypedLogger final : public AnyReader {
     while (reader->take_next_sample(&sample, &info) == ReturnCode_t::RETCODE_OK) {
       std::string handle(16, '\0');
       std::memcpy(handle.data(), info.instance_handle.value, handle.size());
-      json line{{"topic", teejet::dds::topics::TopicOf<Sample>::kName},
+      json line{{"topic", teejet::dds::topics::topic_name<Sample>()},
                 {"received_ns", u64(ns(info.reception_timestamp))},
                 {"source_ns", u64(ns(info.source_timestamp))}};
       if (info.valid_data) {
@@ -188,8 +188,7 @@ class TypedLogger final : public AnyReader {
 template <class Sample>
 std::unique_ptr<AnyReader> open(teejet::dds::Participant& participant, bool reliable,
                                 bool transient) {
-  using Topic = teejet::dds::topics::TopicOf<Sample>;
-  auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+  auto topic = teejet::dds::topics::topic_of<Sample>(participant);
   if (!topic) throw std::runtime_error(topic.error().reason);
   DataReaderQos qos = teejet::dds::topics::state_reader_qos();
   qos.reliability().kind = reliable ? RELIABLE_RELIABILITY_QOS : BEST_EFFORT_RELIABILITY_QOS;
@@ -230,7 +229,7 @@ int main(int argc, char** argv) {
   readers.push_back(open<teejet::ValveDegreesPerSecond>(p, true, true));
   readers.push_back(open<teejet::ValveSpeedDirection>(p, true, true));
   readers.push_back(open<teejet::ValveRunTime>(p, true, true));
-  readers.push_back(open<teejet::ValveCycleCount>(p, true, true));
+  readers.push_back(open<teejet::ValveCycleCounts>(p, true, true));
   readers.push_back(open<teejet::ValveBaudRate>(p, true, true));
   readers.push_back(open<teejet::ValveError>(p, true, true));
   readers.push_back(open<teejet::ValveCommand>(p, true, false));

@@ -146,10 +146,10 @@ TEST(SimValveBank, FramesToAnEmptyAddressAreIgnored) {
 TEST(SimValveBank, ErrorsAreInjectedBySerial) {
   ValveBank bank;
   ASSERT_TRUE(bank.power_up({valve_with(1), valve_with(2)}, kT0));
-  EXPECT_FALSE(bank.inject_error(3, {ErrorKind::kHighVoltage, 16, 15}, kT0));
-  EXPECT_FALSE(bank.inject_error(2, {ErrorKind::kHighTemperature, 300, 15}, kT0));
+  EXPECT_FALSE(bank.inject_error(3, codec::HighVoltageError{16, 15}, kT0));
+  EXPECT_FALSE(bank.inject_error(2, codec::HighTemperatureError{300, 15}, kT0));
   EXPECT_EQ(bank.advance(at_ms(100)).size(), 2u);  // the I'm Here of both
-  ASSERT_TRUE(bank.inject_error(2, {ErrorKind::kLowVoltage, 9, 10}, at_ms(500)));
+  ASSERT_TRUE(bank.inject_error(2, codec::LowVoltageError{9, 10}, at_ms(500)));
   const auto out = bank.advance(at_ms(500));
   ASSERT_EQ(out.size(), 1u);
   EXPECT_EQ(out[0].address, 0xD9);

@@ -159,7 +159,7 @@ TEST(SimCli, Sigusr1TakesHotplugValvesFromTheConfigFileFirst) {
   ASSERT_TRUE(logs(sim, "simulating 2 valve(s)")) << sim.err();
   sim.signal(SIGUSR1);
   EXPECT_TRUE(logs(sim, "TJV000002 added at 0xD9")) << sim.err();
-  EXPECT_TRUE(logs(sim, "TJV000002: high-voltage error latched")) << sim.err();
+  EXPECT_TRUE(logs(sim, "TJV000002: high_voltage error latched")) << sim.err();
   sim.signal(SIGUSR1);  // the list is used up: one below the lowest
   EXPECT_TRUE(logs(sim, "TJV000000 added at 0xD8")) << sim.err();
   sim.signal(SIGINT);

@@ -40,12 +40,12 @@ TEST(SimConfigFile, TheExampleFileParses) {
   EXPECT_EQ(first.sensor_temperature_c, -2);
   EXPECT_EQ(first.running_amps, 0.85);
   EXPECT_EQ(first.bit_rate, codec::kBitRate500k);
-  EXPECT_EQ(first.errors, (std::vector<InjectedError>{{ErrorKind::kHighTemperature, 95, 85}}));
+  EXPECT_EQ(first.errors, (std::vector<InjectedError>{codec::HighTemperatureError{95, 85}}));
   ASSERT_EQ(file->hotplug.size(), 1u);
   EXPECT_EQ(file->hotplug[0].serial, 100u);
   EXPECT_EQ(file->errors,
             (std::vector<SerialError>{
-                {123457, {ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose}}}));
+                {123457, codec::MinDegreesPerSecondError{20, 30, codec::Direction::kClose}}}));
 }
 
 TEST(SimConfigFile, AnEmptyFileIsNoSettings) {
@@ -76,7 +76,8 @@ TEST(SimConfigFile, FileMistakesAreRefusedWithTheLine) {
                        "sim.yaml:4: valves[0].errors[0]: unknown key 'serial'"));
   EXPECT_TRUE(contains(reason("valves:\n  - serial: 1\n    errors:\n      - {kind: "
                               "high-temperature, value: 300, limit: 85}\n"),
-                       "sim.yaml:4: valves[0].errors[0]: high-temperature"));
+                       "sim.yaml:4: valves[0].errors[0]: high_temperature_error: temperature_c "
+                       "300 is outside 0 to 127"));
   EXPECT_TRUE(contains(reason("errors: {serial: 1}\n"), "sim.yaml:1: errors: expected a list"));
 }
 

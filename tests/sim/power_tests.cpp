@@ -20,7 +20,7 @@ TEST(SimValvePower, PowerOffStopsTheMotorAndSilencesTheValve) {
   SimulatedValve valve(valve_with(1));
   valve.schedule_i_am_here(kT0);
   valve.handle(codec::RequestPosition{1}, kT0);  // resent every 100 ms
-  valve.inject_error({ErrorKind::kHighVoltage, 16.2, 15.5}, kT0);
+  valve.inject_error(codec::HighVoltageError{16.2, 15.5}, kT0);
   valve.handle(kOpenTo90, kT0);
   valve.power_off(at_ms(500));  // 45 degrees into the move
   EXPECT_FALSE(valve.powered());
@@ -36,7 +36,7 @@ TEST(SimValvePower, PowerOffStopsTheMotorAndSilencesTheValve) {
 TEST(SimValvePower, PowerOnKeepsTheCountersAndStartsAsAfterAPowerUp) {
   SimulatedValve valve(valve_with(1));
   valve.handle(codec::RequestPosition{1}, kT0);
-  valve.inject_error({ErrorKind::kLowVoltage, 9.0, 10.0}, kT0);
+  valve.inject_error(codec::LowVoltageError{9.0, 10.0}, kT0);
   valve.handle(kOpenTo90, kT0);
   valve.power_off(at_ms(2000));  // the move ended at 1 s: 1 s of run time, 1 cycle
   valve.power_on();
@@ -47,7 +47,7 @@ TEST(SimValvePower, PowerOnKeepsTheCountersAndStartsAsAfterAPowerUp) {
   EXPECT_DOUBLE_EQ(valve.run_time_seconds(at_ms(3000)), 1.0);
   EXPECT_DOUBLE_EQ(valve.position(at_ms(3000)), 90.0);
   EXPECT_EQ(valve.resend_period(codec::RequestPosition::kId), std::nullopt);
-  EXPECT_FALSE(valve.error_latched(ErrorKind::kLowVoltage));
+  EXPECT_FALSE(valve.error_latched("low_voltage"));
   EXPECT_EQ(valve.direction(), codec::Direction::kClose);
   // Last running amps is 0 again until the valve runs at 100 %.
   EXPECT_EQ(only<codec::RunCurrent>(valve.handle(codec::RequestCurrent{0}, at_ms(3000))),

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sim_test_support.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/sim/simulated_valve.hpp"
 
 namespace teejet::sim::testing {
@@ -170,19 +171,27 @@ TEST(SimValveRequests, EachKindResendsOnItsOwnPeriod) {
   EXPECT_EQ(positions, 10);
   EXPECT_EQ(voltages, 3);
   EXPECT_EQ(counts, 1);
-  for (std::uint8_t id = 0x11; id <= 0x18; ++id) {
+}
+
+// Every telemetry request of the codec's table is answered with the reply the table names,
+// and the ones with automatic resend resend it.
+TEST(SimValveRequests, EveryTelemetryRequestOfTheTableIsAnsweredAndResent) {
+  for (const std::string_view name : codec::telemetry_names()) {
     SimulatedValve each(limited_valve(0.0));
-    const auto now = at_ms(0);
-    const std::vector<codec::ToValveMessage> requests{
-        codec::RequestPosition{1},         codec::RequestTemperature{1},
-        codec::RequestVoltage{1},          codec::RequestCurrent{1},
-        codec::RequestDegreesPerSecond{1}, codec::RequestSpeedDirection{1},
-        codec::RequestRunTime{1},          codec::RequestCycleCounts{1}};
-    each.handle(requests[id - 0x11], now);
-    EXPECT_EQ(each.resend_period(id), std::optional<Duration>(100ms)) << int{id};
+    auto request = *codec::telemetry_request(name);
+    const auto& described = codec::describe(request);
+    const bool resends = codec::set_field(request, "resend_tenths", std::int64_t{1}).ok();
+    const auto replies = each.handle(request, at_ms(0));
+    ASSERT_EQ(replies.size(), 1u) << name;
+    EXPECT_EQ(codec::message_id(replies.front()), described.reply) << name;
+    if (!resends) {
+      EXPECT_FALSE(each.next_due()) << name;
+      continue;
+    }
+    EXPECT_EQ(each.resend_period(described.id), std::optional<Duration>(100ms)) << name;
     const auto resent = each.advance(at_ms(100));
-    ASSERT_EQ(resent.size(), 1u);
-    EXPECT_EQ(resent.front(), each.telemetry(id, at_ms(100))) << int{id};
+    ASSERT_EQ(resent.size(), 1u) << name;
+    EXPECT_EQ(resent.front(), each.reply_to(request, at_ms(100))) << name;
   }
 }
 
@@ -239,56 +248,43 @@ TEST(SimValveRequests, BaudRateIsReportedAndSet) {
 
 // ---- Errors ------------------------------------------------------------------------------
 
-struct ErrorCase {
-  InjectedError error;
-  codec::FromValveMessage expected;
-};
-
-void PrintTo(const ErrorCase& error_case, std::ostream* out) {
-  *out << to_string(error_case.error.kind) << ' ' << error_case.error.value << ' '
-       << error_case.error.limit;
-}
-
-class SimValveErrors : public ::testing::TestWithParam<ErrorCase> {};
+class SimValveErrors : public ::testing::TestWithParam<InjectedError> {};
 
 TEST_P(SimValveErrors, LatchedSentAtOnceRepeatedEverySecondUntilClearErrors) {
-  const auto& [error, expected] = GetParam();
+  const auto& error = GetParam();
+  const std::vector<codec::FromValveMessage> expected{error};
   SimulatedValve valve(limited_valve());
   valve.inject_error(error, at_ms(100));
-  EXPECT_TRUE(valve.error_latched(error.kind));
+  EXPECT_TRUE(valve.error_latched(codec::error_kind(error)));
   EXPECT_TRUE(valve.advance(at_ms(99)).empty());
-  EXPECT_EQ(valve.advance(at_ms(100)), std::vector{expected});
+  EXPECT_EQ(valve.advance(at_ms(100)), expected);
   EXPECT_TRUE(valve.advance(at_ms(1099)).empty());
-  EXPECT_EQ(valve.advance(at_ms(1100)), std::vector{expected});
-  EXPECT_EQ(valve.advance(at_ms(2100)), std::vector{expected});
+  EXPECT_EQ(valve.advance(at_ms(1100)), expected);
+  EXPECT_EQ(valve.advance(at_ms(2100)), expected);
   valve.handle(codec::ClearErrors{}, at_ms(2500));
-  EXPECT_FALSE(valve.error_latched(error.kind));
+  EXPECT_FALSE(valve.error_latched(codec::error_kind(error)));
   EXPECT_FALSE(valve.next_due());
   EXPECT_TRUE(valve.advance(at_ms(10'000)).empty());
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    EachOfTheSix, SimValveErrors,
-    ::testing::Values(
-        ErrorCase{{ErrorKind::kHighVoltage, 16.2, 15.5}, codec::HighVoltageError{16.2, 15.5}},
-        ErrorCase{{ErrorKind::kLowVoltage, 9.1, 10.0}, codec::LowVoltageError{9.1, 10.0}},
-        ErrorCase{{ErrorKind::kHighCurrent, 2.35, 2.0}, codec::HighCurrentError{2.35, 2.0}},
-        ErrorCase{{ErrorKind::kLowCurrent, 0.05, 0.1}, codec::LowCurrentError{0.05, 0.1}},
-        ErrorCase{{ErrorKind::kHighTemperature, 95, 85}, codec::HighTemperatureError{95, 85}},
-        ErrorCase{{ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose},
-                  codec::MinDegreesPerSecondError{20, 30, codec::Direction::kClose}}),
-    [](const ::testing::TestParamInfo<ErrorCase>& param) {
-      std::string name(to_string(param.param.error.kind));  // "high-voltage" -> "high_voltage"
-      for (char& c : name) c = c == '-' ? '_' : c;
-      return name;
-    });
+INSTANTIATE_TEST_SUITE_P(EachOfTheSix, SimValveErrors,
+                         ::testing::Values(InjectedError{codec::HighVoltageError{16.2, 15.5}},
+                                           InjectedError{codec::LowVoltageError{9.1, 10.0}},
+                                           InjectedError{codec::HighCurrentError{2.35, 2.0}},
+                                           InjectedError{codec::LowCurrentError{0.05, 0.1}},
+                                           InjectedError{codec::HighTemperatureError{95, 85}},
+                                           InjectedError{codec::MinDegreesPerSecondError{
+                                               20, 30, Direction::kClose}}),
+                         [](const ::testing::TestParamInfo<InjectedError>& param) {
+                           return std::string(codec::error_kind(param.param));
+                         });
 
 TEST(SimValveRequests, SeveralErrorsAreLatchedTogetherAndReinjectingReplacesTheValues) {
   SimulatedValve valve(limited_valve());
-  valve.inject_error({ErrorKind::kHighVoltage, 16.2, 15.5}, at_ms(0));
-  valve.inject_error({ErrorKind::kHighTemperature, 90, 85}, at_ms(0));
+  valve.inject_error(codec::HighVoltageError{16.2, 15.5}, at_ms(0));
+  valve.inject_error(codec::HighTemperatureError{90, 85}, at_ms(0));
   EXPECT_EQ(valve.advance(at_ms(0)).size(), 2u);
-  valve.inject_error({ErrorKind::kHighVoltage, 16.4, 15.5}, at_ms(300));
+  valve.inject_error(codec::HighVoltageError{16.4, 15.5}, at_ms(300));
   EXPECT_EQ(valve.advance(at_ms(300)),
             (std::vector<codec::FromValveMessage>{codec::HighVoltageError{16.4, 15.5}}));
   EXPECT_EQ(valve.advance(at_ms(1000)).size(), 1u);  // temperature, on its own rhythm
@@ -299,7 +295,7 @@ TEST(SimValveRequests, SeveralErrorsAreLatchedTogetherAndReinjectingReplacesTheV
 TEST(SimValveRequests, ErrorsDoNotStopTheValveClearErrorsDoes) {
   SimulatedValve valve(limited_valve(0.0));
   valve.handle(codec::Manual{100, codec::Direction::kOpen}, at_ms(0));
-  valve.inject_error({ErrorKind::kHighCurrent, 2.5, 2.0}, at_ms(100));
+  valve.inject_error(codec::HighCurrentError{2.5, 2.0}, at_ms(100));
   EXPECT_TRUE(valve.running(at_ms(200)));
   valve.handle(codec::ClearErrors{}, at_ms(200));
   EXPECT_FALSE(valve.running(at_ms(200)));
@@ -307,13 +303,26 @@ TEST(SimValveRequests, ErrorsDoNotStopTheValveClearErrorsDoes) {
 
 TEST(SimValveRequests, ValuesOutsideTheMessageAreRefused) {
   SimulatedValve valve(limited_valve());
-  EXPECT_THROW(valve.inject_error({ErrorKind::kHighTemperature, 200, 85}, at_ms(0)),
+  EXPECT_THROW(valve.inject_error(codec::HighTemperatureError{200, 85}, at_ms(0)),
                std::invalid_argument);
-  EXPECT_THROW(valve.inject_error({ErrorKind::kMinDegreesPerSecond, 20.5, 30}, at_ms(0)),
+  EXPECT_THROW(valve.inject_error(codec::HighCurrentError{700, 2}, at_ms(0)),
                std::invalid_argument);
-  EXPECT_THROW(valve.inject_error({ErrorKind::kHighCurrent, 700, 2}, at_ms(0)),
-               std::invalid_argument);
+  EXPECT_THROW(valve.inject_error(codec::Position{45.0}, at_ms(0)), std::invalid_argument);
   EXPECT_FALSE(valve.next_due());
+}
+
+TEST(SimValveRequests, ErrorsAreMadeFromTheCodecsWordsAndChecked) {
+  EXPECT_EQ(*make_error("high_voltage", 16.2, 15.5),
+            (InjectedError{codec::HighVoltageError{16.2, 15.5}}));
+  EXPECT_EQ(*make_error("min-dps", 20, 30, "close"),
+            (InjectedError{codec::MinDegreesPerSecondError{20, 30, Direction::kClose}}));
+  EXPECT_EQ(make_error("min_degrees_per_second", 20.5, 30).error().reason,
+            "min_degrees_per_second_error: dps 20.5 is not a whole number");
+  EXPECT_EQ(make_error("high_temperature", 200, 85).error().reason,
+            "high_temperature_error: temperature_c 200 is outside 0 to 127");
+  EXPECT_EQ(make_error("high_voltage", 16, 15, "open").error().reason,
+            "high_voltage takes no DIRECTION");
+  EXPECT_FALSE(make_error("sparks", 1, 2));
 }
 
 }  // namespace

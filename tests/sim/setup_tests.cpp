@@ -7,6 +7,7 @@
 #include "setup.hpp"
 #include "support/text.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::sim {
 namespace {
@@ -36,19 +37,23 @@ TEST(SimSetup, InvalidConfigurationsNameTheValveAndTheField) {
       EXPECT_TRUE(contains(status.error().reason, "TJV000042")) << status.error().reason;
     }
   };
-  refused([](ValveConfig& c) { c.opened_degrees = 341; }, "at most 340");
+  // The ranges are the codec's, named by the field of the message that reports the value.
+  refused([](ValveConfig& c) { c.opened_degrees = 341; },
+          "opened_degrees 341 is neither 360 (full turn) nor at most 340");
   refused([](ValveConfig& c) { c.opened_degrees = 400; }, "neither 360");
-  refused([](ValveConfig& c) { c.closed_degrees = 90; }, "below opened");
+  refused([](ValveConfig& c) { c.closed_degrees = 90; },
+          "closed_degrees 90 must be at least 0 and below opened_degrees 90");
   refused([](ValveConfig& c) { c.closed_degrees = -1; }, "at least 0");
-  refused([](ValveConfig& c) { c.degrees_per_second = 0; }, "degrees per second");
-  refused([](ValveConfig& c) { c.degrees_per_second = 360; }, "degrees per second");
+  refused([](ValveConfig& c) { c.degrees_per_second = 0; }, "degrees per second 0 must be above 0");
+  refused([](ValveConfig& c) { c.degrees_per_second = 360; }, "dps 360 is outside 0 to 359");
   refused([](ValveConfig& c) { c.start_degrees = 91; }, "start position");
-  refused([](ValveConfig& c) { c.volts = 17; }, "volts");
-  refused([](ValveConfig& c) { c.valve_temperature_c = 128; }, "temperature");
-  refused([](ValveConfig& c) { c.running_amps = -1; }, "running amps");
-  refused([](ValveConfig& c) { c.bit_rate = 125000; }, "bit rate");
-  refused([](ValveConfig& c) { c.part_number = 0x1000000; }, "part number");
-  refused([](ValveConfig& c) { c.application_version.minor = 256; }, "version");
+  refused([](ValveConfig& c) { c.volts = 17; }, "volts 17 is outside 0 to 16.5");
+  refused([](ValveConfig& c) { c.valve_temperature_c = 128; },
+          "valve_c 128 is outside -127 to 127");
+  refused([](ValveConfig& c) { c.running_amps = -1; }, "amps -1 is outside 0 to 655.35");
+  refused([](ValveConfig& c) { c.bit_rate = 125000; }, "bit_rate 125000 is neither");
+  refused([](ValveConfig& c) { c.part_number = 0x1000000; }, "part_number 16777216 is outside");
+  refused([](ValveConfig& c) { c.application_version.minor = 256; }, "application");
   refused([](ValveConfig& c) { c.serial = 0x1000000; }, "24 bits");
 }
 
@@ -57,17 +62,21 @@ TEST(SimSetup, InvalidConfigurationsNameTheValveAndTheField) {
 TEST(SimSetup, ErrorSpecsParse) {
   const auto high_voltage = parse_error_spec("TJV000001:high-voltage:16.2:15.5");
   ASSERT_TRUE(high_voltage) << high_voltage.error().reason;
-  EXPECT_EQ(*high_voltage, (SerialError{1, {ErrorKind::kHighVoltage, 16.2, 15.5}}));
+  EXPECT_EQ(*high_voltage, (SerialError{1, codec::HighVoltageError{16.2, 15.5}}));
   const auto min_dps = parse_error_spec("123456:min_dps:20:30:close");
   ASSERT_TRUE(min_dps) << min_dps.error().reason;
   EXPECT_EQ(
       *min_dps,
-      (SerialError{123456, {ErrorKind::kMinDegreesPerSecond, 20, 30, codec::Direction::kClose}}));
-  for (const auto* kind : {"high-voltage", "low-voltage", "high-current", "low-current",
-                           "high-temperature", "min-dps"}) {
-    const auto parsed = parse_error_spec(std::string("7:") + kind + ":1:2");
+      (SerialError{123456, codec::MinDegreesPerSecondError{20, 30, codec::Direction::kClose}}));
+  // The codec's words, and the older ones with '-' and min-dps.
+  for (const std::string_view kind : codec::error_kinds()) {
+    const auto parsed = parse_error_spec("7:" + std::string(kind) + ":1:2");
     ASSERT_TRUE(parsed) << kind;
-    EXPECT_EQ(to_string(parsed->error.kind), kind);
+    EXPECT_EQ(codec::error_kind(parsed->error), kind);
+  }
+  for (const auto* older : {"high-voltage", "low-voltage", "high-current", "low-current",
+                            "high-temperature", "min-dps"}) {
+    EXPECT_TRUE(parse_error_spec(std::string("7:") + older + ":1:2")) << older;
   }
 }
 
@@ -81,19 +90,20 @@ TEST(SimSetup, BadErrorSpecsSayWhatIsWrong) {
   EXPECT_TRUE(contains(reason("x:high-voltage:16:15"), "serial 'x'"));
   EXPECT_TRUE(contains(reason("1:sparks:16:15"), "unknown error kind 'sparks'"));
   EXPECT_TRUE(contains(reason("1:high-voltage:hot:15"), "must be numbers"));
-  EXPECT_TRUE(contains(reason("1:high-voltage:16:15:open"), "only min-dps"));
-  EXPECT_TRUE(contains(reason("1:min-dps:16:15:up"), "open or close"));
-  EXPECT_TRUE(contains(reason("1:high-temperature:130:100"), "high-temperature"));
-  EXPECT_TRUE(contains(reason("1:high-temperature:90.5:100"), "whole numbers"));
-  EXPECT_TRUE(contains(reason("1:low-current:-1:1"), "at least 0"));
+  EXPECT_TRUE(contains(reason("1:high-voltage:16:15:open"), "high_voltage takes no DIRECTION"));
+  EXPECT_TRUE(contains(reason("1:min-dps:16:15:up"), "\"up\" is not one of close, open"));
+  EXPECT_TRUE(
+      contains(reason("1:high-temperature:130:100"), "temperature_c 130 is outside 0 to 127"));
+  EXPECT_TRUE(contains(reason("1:high-temperature:90.5:100"), "90.5 is not a whole number"));
+  EXPECT_TRUE(contains(reason("1:low-current:-1:1"), "amps -1 is outside 0 to 655.35"));
 }
 
 TEST(SimSetup, VersionsAndRotationsParse) {
-  EXPECT_EQ(*parse_version("1.02e"), (codec::SoftwareVersion{1, 2, 'e'}));
-  EXPECT_EQ(*parse_version("2.10"), (codec::SoftwareVersion{2, 10, 0}));
-  EXPECT_FALSE(parse_version("1"));
-  EXPECT_FALSE(parse_version("1.2ee"));
-  EXPECT_FALSE(parse_version("256.1"));
+  EXPECT_EQ(*codec::parse_version("1.02e"), (codec::SoftwareVersion{1, 2, 'e'}));
+  EXPECT_EQ(*codec::parse_version("2.10"), (codec::SoftwareVersion{2, 10, 0}));
+  EXPECT_FALSE(codec::parse_version("1"));
+  EXPECT_FALSE(codec::parse_version("1.2ee"));
+  EXPECT_FALSE(codec::parse_version("256.1"));
   EXPECT_EQ(parse_rotation("counterclockwise"), codec::Rotation::kCounterclockwise);
   EXPECT_EQ(parse_rotation("cw"), codec::Rotation::kClockwise);
   EXPECT_FALSE(parse_rotation("left"));
@@ -167,7 +177,7 @@ TEST(SimSetup, CompositionMistakesAreRefused) {
   two.valve_count = 2;
   EXPECT_TRUE(contains(reason(two, "valves:\n  - serial: 9\n"), "TJV000009, which is not"));
   auto with_error = two;
-  with_error.errors.push_back({9, {ErrorKind::kHighVoltage, 16, 15}});
+  with_error.errors.push_back({9, codec::HighVoltageError{16, 15}});
   EXPECT_TRUE(contains(reason(with_error, ""), "not a simulated valve"));
   auto bad_flags = two;
   bad_flags.settings.opened_degrees = 350;

@@ -229,15 +229,15 @@ TEST_F(SimRuntime, AValveAddedAtRunTimeReshufflesTheAddresses) {
 
 TEST_F(SimRuntime, InjectedErrorsRepeatUntilClearErrorsOverTheBus) {
   auto options = options_for({valve_with(1), valve_with(2)});
-  options.errors.push_back({2, {ErrorKind::kLowVoltage, 9.5, 10.0}});
+  options.errors.push_back({2, codec::LowVoltageError{9.5, 10.0}});
   start(std::move(options));
   auto seen = until([](const Received& r) { return is<codec::LowVoltageError>(r); });
   ASSERT_FALSE(seen.empty());
   EXPECT_EQ(seen.back().address, 0xD9);
   EXPECT_EQ(seen.back().message, (codec::FromValveMessage{codec::LowVoltageError{9.5, 10.0}}));
-  ASSERT_TRUE(simulator->inject_error(1, {ErrorKind::kHighCurrent, 2.5, 2.0}));
+  ASSERT_TRUE(simulator->inject_error(1, codec::HighCurrentError{2.5, 2.0}));
   EXPECT_FALSE(until([](const Received& r) { return is<codec::HighCurrentError>(r); }).empty());
-  EXPECT_FALSE(simulator->inject_error(9, {ErrorKind::kHighCurrent, 2.5, 2.0}));
+  EXPECT_FALSE(simulator->inject_error(9, codec::HighCurrentError{2.5, 2.0}));
   clock->advance(std::chrono::seconds(1));
   seen = until([](const Received& r) { return is<codec::HighCurrentError>(r); });
   EXPECT_EQ(seen.back().address, 0xD8);
@@ -311,7 +311,7 @@ TEST_F(SimRuntime, StartFailsVisiblyWhenTheBusCannotOpenOrTheBankIsBad) {
   Simulator empty(std::make_unique<can::VirtualBus>(bus_name), options_for({}));
   EXPECT_FALSE(empty.start());
   auto options = options_for({valve_with(1)});
-  options.errors.push_back({7, {ErrorKind::kLowVoltage, 9, 10}});
+  options.errors.push_back({7, codec::LowVoltageError{9, 10}});
   Simulator wrong_serial(std::make_unique<can::VirtualBus>(bus_name), std::move(options));
   EXPECT_FALSE(wrong_serial.start());
 }

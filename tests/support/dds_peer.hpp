@@ -29,8 +29,7 @@ class DdsPeer {
   eprosima::fastdds::dds::DataReader* reader(
       const eprosima::fastdds::dds::DataReaderQos& qos = dds::topics::state_reader_qos(),
       eprosima::fastdds::dds::DataReaderListener* listener = nullptr) {
-    using Topic = dds::topics::TopicOf<Sample>;
-    auto topic = participant_->topic<typename Topic::PubSubType>(Topic::kName);
+    auto topic = dds::topics::topic_of<Sample>(*participant_);
     if (!topic) return refused(topic.error());
     auto made = participant_->reader(*topic, qos, listener);
     if (!made) return refused(made.error());

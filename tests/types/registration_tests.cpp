@@ -20,7 +20,7 @@ constexpr const char* kTypeNames[] = {
     "teejet::SoftwareVersion", "teejet::ValvePresence",         "teejet::ValveVersion",
     "teejet::ValvePosition",   "teejet::ValveTemperature",      "teejet::ValveVoltage",
     "teejet::ValveCurrent",    "teejet::ValveDegreesPerSecond", "teejet::ValveSpeedDirection",
-    "teejet::ValveRunTime",    "teejet::ValveCycleCount",       "teejet::ValveBaudRate",
+    "teejet::ValveRunTime",    "teejet::ValveCycleCounts",      "teejet::ValveBaudRate",
     "teejet::ValveError",      "teejet::ValveCommand",          "teejet::CommandStatus",
     "teejet::GatewayStatus"};
 

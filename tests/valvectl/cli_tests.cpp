@@ -122,7 +122,7 @@ TEST(ValvectlCommandLine, ManualNeedsSpeedAndOpenOrClose) {
   usage_error({"manual", "5", "--direction", "open"});
   usage_error({"manual", "5", "--speed", "40"});
   EXPECT_NE(usage_error({"manual", "5", "--speed", "40", "--direction", "shortest"})
-                .find("open or close"),
+                .find("--direction \"shortest\" is not one of close, open"),
             std::string::npos);
 }
 
@@ -156,15 +156,27 @@ TEST(ValvectlCommandLine, RequestNamesWhatAndAResendPeriod) {
   EXPECT_EQ(request.command.telemetry(), TELEMETRY_VOLTAGE);
   EXPECT_EQ(request.command.resend_tenths(), 10);
   const std::vector<std::pair<std::string, Telemetry>> words = {
-      {"version", TELEMETRY_VERSION},          {"position", TELEMETRY_POSITION},
-      {"temperature", TELEMETRY_TEMPERATURE},  {"voltage", TELEMETRY_VOLTAGE},
-      {"current", TELEMETRY_CURRENT},          {"dps", TELEMETRY_DEGREES_PER_SECOND},
-      {"speed", TELEMETRY_SPEED_DIRECTION},    {"run-time", TELEMETRY_RUN_TIME},
-      {"cycle-counts", TELEMETRY_CYCLE_COUNTS}};
+      {"version", TELEMETRY_VERSION},
+      {"position", TELEMETRY_POSITION},
+      {"temperature", TELEMETRY_TEMPERATURE},
+      {"voltage", TELEMETRY_VOLTAGE},
+      {"current", TELEMETRY_CURRENT},
+      {"dps", TELEMETRY_DEGREES_PER_SECOND},
+      {"speed", TELEMETRY_SPEED_DIRECTION},
+      {"run-time", TELEMETRY_RUN_TIME},
+      {"cycle-counts", TELEMETRY_CYCLE_COUNTS},
+      {"cycle_counts", TELEMETRY_CYCLE_COUNTS},
+      {"run_time", TELEMETRY_RUN_TIME},
+      {"degrees_per_second", TELEMETRY_DEGREES_PER_SECOND},
+      {"speed_direction", TELEMETRY_SPEED_DIRECTION}};
   for (const auto& [word, telemetry] : words) {
     EXPECT_EQ(command_of({"request", "3", word}).command.telemetry(), telemetry) << word;
   }
-  EXPECT_NE(usage_error({"request", "3", "pressure"}).find("run-time"), std::string::npos);
+  // The codec's names, as the help says them.
+  EXPECT_NE(usage_error({"request", "3", "pressure"})
+                .find("'pressure' is not one of version position temperature voltage current "
+                      "degrees_per_second speed_direction run_time cycle_counts"),
+            std::string::npos);
   EXPECT_NE(usage_error({"request", "3", "version", "--every", "5"}).find("once"),
             std::string::npos);
   EXPECT_NE(usage_error({"request", "3", "position", "--every", "256"}).find("0 to 255"),

@@ -346,8 +346,7 @@ TEST_F(ValvectlEndToEnd, JogWithWaitCompletesWhenTheTimeIsUp) {
 }
 
 TEST_F(ValvectlEndToEnd, LatchedErrorsShowInTheListUntilCleared) {
-  ASSERT_TRUE(gateway_->simulator().inject_error(
-      kFaulty, {.kind = sim::ErrorKind::kHighVoltage, .value = 16.2, .limit = 15.5}));
+  ASSERT_TRUE(gateway_->simulator().inject_error(kFaulty, codec::HighVoltageError{16.2, 15.5}));
   const auto error_listed = [](const std::string& expected) {
     return eventually(
         [&] {

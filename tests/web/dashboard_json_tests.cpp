@@ -51,13 +51,21 @@ ValveCommand move(std::uint32_t serial, std::uint32_t id, float degrees) {
 TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
   client::ValveTable table;
   table.on_presence(presence(1, true));
-  table.on_position(1, 45.3, 10);
-  table.on_temperature(1, 25, 31, 10);
-  table.on_voltage(1, 12.1, 10);
+  table.on_telemetry(1, codec::Position{45.3}, 10);
+  table.on_telemetry(1, codec::Temperature{25, 31}, 10);
+  table.on_telemetry(1, codec::Voltage{12.1}, 10);
   table.on_error(1, ERROR_HIGH_CURRENT);
-  table.on_reply(1, "current", {10, {{"amps", 0.35}, {"last_running_amps", 0.5}}});
-  table.on_reply(1, "speed_direction",
-                 {10, {{"speed_percent", 80}, {"direction", "open"}, {"opening_direction", "cw"}}});
+  table.on_telemetry(1, codec::RunCurrent{0.35, 0.5}, 10);
+  table.on_telemetry(
+      1, codec::SpeedDirection{80, codec::Direction::kOpen, codec::Rotation::kClockwise}, 10);
+  const json telemetry = {
+      {"position", {{"degrees", 45.3}}},
+      {"temperature", {{"valve_c", 25}, {"sensor_c", 31}}},
+      {"voltage", {{"volts", 12.1}}},
+      {"current", {{"amps", 0.35}, {"last_running_amps", 0.5}}},
+      {"speed_direction",
+       {{"speed_percent", 80}, {"direction", "open"}, {"opening_direction", "clockwise"}}},
+  };
   const json expected = {
       {"serial", "TJV000001"}, {"address", 217},
       {"online", true},        {"boot_mode", false},
@@ -65,7 +73,7 @@ TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
       {"volts", 12.1},         {"errors", json::array({"high_current"})},
       {"gateway", "gw"},       {"target", 90.0},
       {"amps", 0.35},          {"speed_percent", 80},
-      {"direction", "open"},
+      {"direction", "open"},   {"telemetry", telemetry},
   };
   EXPECT_EQ(valves_json(table, {{1, 90.0}}), json::array({expected}));
 }
@@ -111,9 +119,9 @@ TEST(WebUpdates, ATickCarriesOnlyTheLatestStateOfWhatChangedSinceTheLastOne) {
   UpdateBatcher batcher;
   batcher.snapshot(dashboard_frame(table, {}));
   // Three samples of valve 2 between ticks: one entry, the latest.
-  table.on_position(2, 10.0, 1);
-  table.on_position(2, 10.5, 2);
-  table.on_position(2, 11.0, 3);
+  table.on_telemetry(2, codec::Position{10.0}, 1);
+  table.on_telemetry(2, codec::Position{10.5}, 2);
+  table.on_telemetry(2, codec::Position{11.0}, 3);
   const auto update = batcher.tick(dashboard_frame(table, {}), 40);
   ASSERT_TRUE(update);
   EXPECT_EQ((*update)["type"], "update");

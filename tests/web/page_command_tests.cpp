@@ -112,7 +112,7 @@ TEST(WebCommands, ACommandDdsDidNotTakeSaysWhy) {
       json::array({{{"serial", "TJV000001"}, {"error", "no gateway subscribes to commands"}}}));
 }
 
-TEST(WebCommands, OutOfRangeValuesAreRefusedWithValvectlsRules) {
+TEST(WebCommands, OutOfRangeValuesAreRefusedWithTheCodecsRules) {
   EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":360,)"
                     R"("speed_percent":100,"direction":"open"})"),
             "move: degrees 360 is outside 0 to 359.9");
@@ -124,26 +124,26 @@ TEST(WebCommands, OutOfRangeValuesAreRefusedWithValvectlsRules) {
             "manual: speed_percent 101 is outside 0 to 100");
   EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":-5,)"
                     R"("direction":"open"})"),
-            "manual: speed_percent -5 is out of range");
+            "manual: speed_percent -5 is outside 0 to 100");
   EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":2.5,)"
                     R"("direction":"open"})"),
-            "manual: speed_percent must be a whole number, got 2.5");
+            "manual: speed_percent 2.5 is not a whole number");
   EXPECT_EQ(refusal(R"({"command":"jog","serial":"TJV000001","milliseconds":65536,)"
                     R"("speed_percent":100,"direction":"open"})"),
             "jog: milliseconds 65536 is outside 0 to 65535");
   EXPECT_EQ(refusal(R"({"command":"manual","serial":"TJV000001","speed_percent":10,)"
                     R"("direction":"shortest"})"),
-            "manual: direction \"shortest\" is not open or close");
+            "manual: direction \"shortest\" is not one of close, open");
   EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"version",)"
                     R"("resend_tenths":5})"),
-            "request: version is sent once; resend_tenths must be 0");
+            "request: resend_tenths must be 0: a valve sends its version once");
   EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"position",)"
                     R"("resend_tenths":256})"),
             "request: resend_tenths 256 is outside 0 to 255");
   EXPECT_EQ(refusal(R"({"command":"request","serial":"TJV000001","telemetry":"pressure",)"
                     R"("resend_tenths":0})"),
             "request: telemetry \"pressure\" is not one of version position temperature voltage "
-            "current dps speed run-time cycle-counts");
+            "current degrees_per_second speed_direction run_time cycle_counts");
 }
 
 TEST(WebCommands, UnknownOrInvalidSerialsAreRefused) {
@@ -169,7 +169,7 @@ TEST(WebCommands, MalformedUnknownAndIncompleteMessagesAreRefused) {
             "stop: unknown field \"degrees\"");
   EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":"10",)"
                     R"("speed_percent":100,"direction":"open"})"),
-            "move: degrees must be a number");
+            "move: degrees \"10\" is not a number");
 }
 
 TEST(WebCommands, AMessageOverFourKibibytesIsRefusedUnread) {

@@ -1,37 +1,37 @@
 #include "dashboard_json.hpp"
 
 #include "teejet/client/json.hpp"
+#include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
 #include "teejet/dds/names.hpp"
 
 namespace teejet::web {
 namespace {
 
-nlohmann::json reply_value(const client::ValveTable& table, std::uint32_t serial,
-                           Telemetry telemetry, const char* field) {
-  const auto reply = table.reply(serial, client::reply_name(telemetry));
-  if (!reply || !reply->values.contains(field)) return nullptr;
-  return reply->values.at(field);
+nlohmann::json reply_value(const client::ValveRow& row, std::string_view subject,
+                           std::string_view field) {
+  const client::Reply* reply = row.reply(subject);
+  const auto value = reply ? codec::field_value(reply->message, field) : std::nullopt;
+  if (!value) return nullptr;
+  return client::to_json(*value);
 }
 
 }  // namespace
 
-nlohmann::json valve_json(const client::ValveTable& table, const client::ValveRow& row,
-                          const Targets& targets) {
+nlohmann::json valve_json(const client::ValveRow& row, const Targets& targets) {
   nlohmann::json json = client::to_json(row);
   const auto target = targets.find(row.serial);
   json["target"] =
       target == targets.end() ? nlohmann::json(nullptr) : nlohmann::json(target->second);
-  json["amps"] = reply_value(table, row.serial, TELEMETRY_CURRENT, "amps");
-  json["speed_percent"] =
-      reply_value(table, row.serial, TELEMETRY_SPEED_DIRECTION, "speed_percent");
-  json["direction"] = reply_value(table, row.serial, TELEMETRY_SPEED_DIRECTION, "direction");
+  json["amps"] = reply_value(row, "current", "amps");
+  json["speed_percent"] = reply_value(row, "speed_direction", "speed_percent");
+  json["direction"] = reply_value(row, "speed_direction", "direction");
   return json;
 }
 
 nlohmann::json valves_json(const client::ValveTable& table, const Targets& targets) {
   nlohmann::json array = nlohmann::json::array();
-  for (const client::ValveRow& row : table.rows())
-    array.push_back(valve_json(table, row, targets));
+  for (const client::ValveRow& row : table.rows()) array.push_back(valve_json(row, targets));
   return array;
 }
 
@@ -54,7 +54,7 @@ nlohmann::json gateway_json(const client::GatewaySummary& gateway) {
 DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets) {
   DashboardFrame frame;
   for (const client::ValveRow& row : table.rows()) {
-    frame.valves.emplace_back(row.serial, valve_json(table, row, targets));
+    frame.valves.emplace_back(row.serial, valve_json(row, targets));
   }
   for (const client::GatewaySummary& gateway : table.gateways()) {
     frame.gateways.emplace_back(gateway.name, gateway_json(gateway));
@@ -98,8 +98,10 @@ std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
 
 void CommandTracker::on_sent(const ValveCommand& command) {
   if (command.kind() == COMMAND_TARGET_DEGREES) {
-    // The wire's float, at its 0.1 degree grid, as positions are shown.
-    targets_[command.serial()] = client::at_resolution(command.degrees(), 10);
+    // The wire's float, on the field's grid, as positions are shown.
+    if (const auto move = dds::to_message(command)) {
+      targets_[command.serial()] = std::get<codec::TargetDegrees>(codec::as_sent(*move)).degrees;
+    }
     running_[command.serial()] = command.command_id();
   } else {
     targets_.erase(command.serial());

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "teejet/valve.h"
 #include "teejet/client/valve_table.hpp"
+#include "teejet/valve.h"
 
 namespace teejet::web {
 
@@ -22,10 +22,9 @@ namespace teejet::web {
 using Targets = std::map<std::uint32_t, double>;
 
 // The client's row (serial, address, online, boot_mode, position, temperature_c, volts, errors,
-// gateway) with what the dashboard adds: "target" of the running command, "amps" and
+// gateway, telemetry) with what the dashboard adds: "target" of the running command, "amps" and
 // "speed_percent"/"direction" from the latest current and speed replies; null when unknown.
-nlohmann::json valve_json(const client::ValveTable& table, const client::ValveRow& row,
-                          const Targets& targets);
+nlohmann::json valve_json(const client::ValveRow& row, const Targets& targets);
 // Every valve, by serial: the body of GET /api/valves.
 nlohmann::json valves_json(const client::ValveTable& table, const Targets& targets);
 

@@ -6,9 +6,8 @@
 #include <set>
 
 #include "teejet/client/command_check.hpp"
-#include "teejet/client/names.hpp"
-#include "teejet/codec/codec.hpp"
-#include "teejet/dds/conversions.hpp"
+#include "teejet/client/json.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::web {
 namespace {
@@ -17,23 +16,37 @@ using nlohmann::json;
 
 Error refused(std::string reason) { return Error{ErrorCode::kInvalidValue, std::move(reason)}; }
 
-// The fields each command takes, besides "command", "id" and "token"; all of them required.
+// The commands of the page, each a message of the sheet (stop_all: Stop to every online valve;
+// request: a telemetry request by name). A command takes "serial" (but stop_all) and the
+// message's fields by the codec's names, all required; besides them only "command", "id" and
+// "token".
 struct Shape {
   std::string_view name;
-  std::vector<std::string_view> fields;
+  std::optional<codec::ToValveMessage> message;  // nullopt: request
+  bool every_online_valve = false;
 };
 const std::array<Shape, 7> kShapes{{
-    {"move", {"serial", "degrees", "speed_percent", "direction"}},
-    {"stop", {"serial"}},
-    {"stop_all", {}},
-    {"manual", {"serial", "speed_percent", "direction"}},
-    {"jog", {"serial", "milliseconds", "speed_percent", "direction"}},
-    {"request", {"serial", "telemetry", "resend_tenths"}},
-    {"clear_errors", {"serial"}},
+    {"move", codec::TargetDegrees{}},
+    {"stop", codec::Stop{}},
+    {"stop_all", codec::Stop{}, true},
+    {"manual", codec::Manual{}},
+    {"jog", codec::MillisecondsToRun{}},
+    {"request", std::nullopt},
+    {"clear_errors", codec::ClearErrors{}},
 }};
 constexpr const char* kReadOnly =
     "commands are disabled: teejet-web runs read-only (start it with --allow-commands)";
 constexpr const char* kCommandNames = "move, stop, stop_all, manual, jog, request, clear_errors";
+
+std::vector<std::string_view> fields_of(const Shape& shape) {
+  std::vector<std::string_view> fields;
+  if (!shape.every_online_valve) fields.push_back("serial");
+  if (!shape.message) return {"serial", "telemetry", "resend_tenths"};
+  for (const codec::FieldInfo& field : codec::describe(*shape.message).fields) {
+    if (field.type != codec::FieldType::kMarker) fields.push_back(field.name);
+  }
+  return fields;
+}
 
 Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& table) {
   if (!value.is_string()) return refused("serial must be a string like \"TJV000001\"");
@@ -46,81 +59,52 @@ Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& 
   return *serial;
 }
 
-// A whole number for the codec to check against its range; the codec takes unsigned.
-Result<unsigned> whole_number(const json& message, const char* field) {
-  const json& value = message.at(field);
-  if (!value.is_number_integer() || value.is_number_float()) {
-    return refused(std::string(field) + " must be a whole number, got " + value.dump());
+// The message's fields from the page's values, refused as the codec refuses them.
+Result<codec::ToValveMessage> with_page_fields(codec::ToValveMessage message, const json& page) {
+  client::FieldValues values;
+  for (const codec::FieldInfo& field : codec::describe(message).fields) {
+    if (field.type == codec::FieldType::kMarker) continue;
+    const json& given = page.at(std::string(field.name));
+    const auto value = client::field_value_of(given);
+    if (!value) {
+      return refused(std::string(field.name) + " must be a number or a word, got " + given.dump());
+    }
+    values.emplace_back(field.name, *value);
   }
-  if (!value.is_number_unsigned() ||
-      value.get<std::uint64_t>() > std::numeric_limits<unsigned>::max()) {
-    return refused(std::string(field) + " " + value.dump() + " is out of range");
-  }
-  return value.get<unsigned>();
+  auto built = client::with_fields(std::move(message), values);
+  if (!built) return refused(built.error().field + " " + built.error().complaint);
+  return built;
 }
 
-Result<Direction> direction_of(const json& message, bool allow_shortest) {
-  const json& value = message.at("direction");
-  const char* allowed = allow_shortest ? "open, close or shortest" : "open or close";
-  if (!value.is_string()) return refused(std::string("direction must be ") + allowed);
-  const auto direction = client::parse_direction(value.get<std::string>(), allow_shortest);
-  if (!direction)
-    return refused("direction \"" + value.get<std::string>() + "\" is not " + allowed);
-  return *direction;
+Result<codec::ToValveMessage> telemetry_request(const json& page) {
+  const json& what = page.at("telemetry");
+  const auto request =
+      what.is_string() ? codec::telemetry_request(what.get<std::string>()) : std::nullopt;
+  if (!request) {
+    std::string names;
+    for (const std::string_view name : codec::telemetry_names()) {
+      if (!names.empty()) names += ' ';
+      names += name;
+    }
+    return refused("telemetry " + what.dump() + " is not one of " + names);
+  }
+  if (codec::find_field(codec::describe(*request), "resend_tenths") != nullptr) {
+    return with_page_fields(*request, page);
+  }
+  if (page.at("resend_tenths") != 0) {
+    return refused("resend_tenths must be 0: a valve sends its " +
+                   std::string(codec::subject(*request)) + " once");
+  }
+  return *request;
 }
 
 // The command for one valve command message, checked by the client's rules.
-Result<ValveCommand> build(std::string_view name, const json& message) {
-  const auto speed = [&]() { return whole_number(message, "speed_percent"); };
-  if (name == "move") {
-    if (!message.at("degrees").is_number()) return refused("degrees must be a number");
-    auto s = speed();
-    if (!s) return s.error();
-    auto d = direction_of(message, /*allow_shortest=*/true);
-    if (!d) return d.error();
-    return client::checked_command(codec::TargetDegrees{*s, client::target_direction(*d),
-                                                          message.at("degrees").get<double>()});
-  }
-  if (name == "stop" || name == "stop_all") return client::checked_command(codec::Stop{});
-  if (name == "clear_errors") return client::checked_command(codec::ClearErrors{});
-  if (name == "manual" || name == "jog") {
-    auto s = speed();
-    if (!s) return s.error();
-    auto d = direction_of(message, /*allow_shortest=*/false);
-    if (!d) return d.error();
-    if (name == "manual") {
-      return client::checked_command(codec::Manual{*s, client::drive_direction(*d)});
-    }
-    auto ms = whole_number(message, "milliseconds");
-    if (!ms) return ms.error();
-    return client::checked_command(
-        codec::MillisecondsToRun{*s, client::drive_direction(*d), *ms});
-  }
-  // request
-  const json& what = message.at("telemetry");
-  const auto telemetry =
-      what.is_string() ? client::parse_telemetry(what.get<std::string>()) : std::nullopt;
-  if (!telemetry) {
-    return refused("telemetry " + what.dump() +
-                   " is not one of version position temperature voltage current dps speed "
-                   "run-time cycle-counts");
-  }
-  auto resend = whole_number(message, "resend_tenths");
-  if (!resend) return resend.error();
-  if (*resend > std::numeric_limits<std::uint8_t>::max()) {
-    // Checked here only because the IDL's uint8 would wrap it before the codec sees it.
-    return refused("resend_tenths " + std::to_string(*resend) + " is outside 0 to 255");
-  }
-  ValveCommand asked;
-  asked.kind(COMMAND_REQUEST);
-  asked.telemetry(*telemetry);
-  asked.resend_tenths(static_cast<std::uint8_t>(*resend));
-  const auto request = dds::to_message(asked);
-  if (!request) {
-    // The contract names the command kind first, as parse_page_command() does: say it once.
-    return refused(client::without_leading_name(request.error().reason));
-  }
-  return client::checked_command(*request);
+Result<ValveCommand> build(const Shape& shape, const json& page) {
+  auto message = shape.message ? with_page_fields(*shape.message, page) : telemetry_request(page);
+  if (!message) return message.error();
+  auto command = client::checked_command(*message);
+  if (!command) return refused(command.error().field + " " + command.error().complaint);
+  return command;
 }
 
 }  // namespace
@@ -145,20 +129,21 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
   if (shape == kShapes.end()) {
     return refused("unknown command \"" + name + "\": one of " + kCommandNames);
   }
+  const auto fields = fields_of(*shape);
   for (const auto& [key, value] : message.items()) {
     if (key == "command" || key == "id" || key == "token") continue;
-    if (std::find(shape->fields.begin(), shape->fields.end(), key) == shape->fields.end()) {
+    if (std::find(fields.begin(), fields.end(), key) == fields.end()) {
       return refused(name + ": unknown field \"" + key + "\"");
     }
   }
-  for (const std::string_view field : shape->fields) {
+  for (const std::string_view field : fields) {
     if (!message.contains(std::string(field))) {
       return refused(name + ": missing \"" + std::string(field) + "\"");
     }
   }
 
   PageCommand checked;
-  if (name == "stop_all") {
+  if (shape->every_online_valve) {
     for (const client::ValveRow& row : table.rows()) {
       if (row.online) checked.serials.push_back(row.serial);
     }
@@ -168,10 +153,63 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
     if (!serial) return serial.error();
     checked.serials.push_back(*serial);
   }
-  auto command = build(name, message);
+  auto command = build(*shape, message);
   if (!command) return refused(name + ": " + command.error().reason);
   checked.command = std::move(*command);
   return checked;
+}
+
+namespace {
+
+json field_json(const codec::FieldInfo& field) {
+  json described{{"unit", field.unit}};
+  switch (field.type) {
+    case codec::FieldType::kNumber:
+      described["type"] = "number";
+      described["min"] = field.min;
+      described["max"] = field.max;
+      described["step"] = field.resolution;
+      break;
+    case codec::FieldType::kWord:
+      described["type"] = "word";
+      described["words"] = field.words;
+      break;
+    case codec::FieldType::kFlag:
+      described["type"] = "flag";
+      break;
+    default:
+      described["type"] = "text";
+      break;
+  }
+  return described;
+}
+
+json fields_json(const codec::MessageInfo& message) {
+  json fields = json::object();
+  for (const codec::FieldInfo& field : message.fields) {
+    if (field.type != codec::FieldType::kMarker)
+      fields[std::string(field.name)] = field_json(field);
+  }
+  return fields;
+}
+
+}  // namespace
+
+json page_protocol_json() {
+  json commands = json::object();
+  for (const Shape& shape : kShapes) {
+    commands[std::string(shape.name)] =
+        shape.message ? fields_json(codec::describe(*shape.message))
+                      : json{{"telemetry", codec::telemetry_names()},
+                             {"resend_tenths",
+                              field_json(*codec::find_field(
+                                  codec::describe(codec::RequestPosition{}), "resend_tenths"))}};
+  }
+  json telemetry = json::object();
+  for (const codec::MessageInfo& message : codec::message_table(codec::Flow::kFromValve)) {
+    if (!message.subject.empty()) telemetry[std::string(message.subject)] = fields_json(message);
+  }
+  return {{"commands", commands}, {"telemetry", telemetry}};
 }
 
 json command_policy_json(const CommandPolicy& policy) {

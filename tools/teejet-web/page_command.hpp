@@ -1,7 +1,7 @@
 #pragma once
 
 // The commands the page may send over its WebSocket, parsed and checked before anything reaches
-// DDS. The range rules are the client library's (client::checked_command, which encodes as the gateway
+// DDS. The range rules are the codec's (client::checked_command, which encodes as the gateway
 // will); the valve must be in the table. handle_page_message() either hands every command to a
 // CommandSender or refuses with a reason and sends nothing, so a test with a recording sender
 // proves that bad input never reaches a valve. docs/web.md lists the messages.
@@ -14,9 +14,9 @@
 #include <string_view>
 #include <vector>
 
+#include "teejet/client/valve_table.hpp"
 #include "teejet/core/result.hpp"
 #include "teejet/valve.h"
-#include "teejet/client/valve_table.hpp"
 
 namespace teejet::web {
 
@@ -48,6 +48,14 @@ struct CommandPolicy {
   bool allow_commands = false;  // --allow-commands; read-only otherwise
   std::string token;            // --token: when set, every command must carry it
 };
+
+// What the page may send and what the valves tell, from the codec's table, so that the page
+// builds its inputs, request list, readings and plot fields without restating the sheet:
+// {"commands":{"move":{"speed_percent":{"type":"number","unit":"%","min":0,"max":100,"step":1},
+//  "direction":{"type":"word","unit":"","words":["close","open","shortest"]},"degrees":{..}},
+//  ...,"request":{"telemetry":["version","position",...],"resend_tenths":{..}}},
+//  "telemetry":{"position":{"degrees":{"type":"number","unit":"°",...}},"current":{..},...}}
+nlohmann::json page_protocol_json();
 
 // What the page's snapshot says of commands, so that a read-only page builds no controls and a
 // page that needs a token asks for one: {"allowed":true,"token_required":false}. Never the token.

@@ -7,7 +7,7 @@
 #include <optional>
 #include <string_view>
 
-#include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/yaml/reader.hpp"
 
 namespace teejet::sim {
@@ -47,7 +47,7 @@ std::uint32_t read_serial(const Reader& reader, const YAML::Node& node, const st
 
 codec::SoftwareVersion read_version(const Reader& reader, const YAML::Node& node,
                                     const std::string& key) {
-  const auto parsed = parse_version(reader.scalar(node, key));
+  const auto parsed = codec::parse_version(reader.scalar(node, key));
   if (!parsed) reader.fail(node, key, parsed.error().reason);
   return *parsed;
 }
@@ -67,21 +67,6 @@ codec::Rotation read_rotation(const Reader& reader, const YAML::Node& node,
   return *rotation;
 }
 
-ErrorKind read_kind(const Reader& reader, const YAML::Node& node, const std::string& key) {
-  const auto text = reader.scalar(node, key);
-  const auto kind = parse_error_kind(text);
-  if (!kind) {
-    std::string what = "unknown error kind '" + text + "' (";
-    for (int i = 0; i < kErrorKindCount; ++i) {
-      if (i > 0) what += ", ";
-      what += to_string(static_cast<ErrorKind>(i));
-    }
-    what += ')';
-    reader.fail(node, key, what);
-  }
-  return *kind;
-}
-
 // {kind, value, limit[, direction]}; in the top-level `errors:` list also the serial, which
 // `serial` then receives. Per-valve errors belong to their valve and have none.
 InjectedError read_error(const Reader& reader, const YAML::Node& node, const std::string& key,
@@ -97,18 +82,15 @@ InjectedError read_error(const Reader& reader, const YAML::Node& node, const std
   }
   if (serial != nullptr && !node["serial"]) reader.fail(node, key, "needs a serial");
 
-  InjectedError error;
-  error.kind = read_kind(reader, node["kind"], member(key, "kind"));
-  error.value = any_number(reader, node["value"], member(key, "value"));
-  error.limit = any_number(reader, node["limit"], member(key, "limit"));
-  if (const auto direction = node["direction"]) {
-    error.direction = reader.word(direction, member(key, "direction"), {"open", "close"}) == "open"
-                          ? codec::Direction::kOpen
-                          : codec::Direction::kClose;
-  }
+  const auto kind = reader.scalar(node["kind"], member(key, "kind"));
+  const double value = any_number(reader, node["value"], member(key, "value"));
+  const double limit = any_number(reader, node["limit"], member(key, "limit"));
+  std::optional<std::string> direction;
+  if (const auto d = node["direction"]) direction = reader.scalar(d, member(key, "direction"));
   if (serial != nullptr) *serial = read_serial(reader, node["serial"], member(key, "serial"));
-  if (const auto valid = validate(error); !valid) reader.fail(node, key, valid.error().reason);
-  return error;
+  const auto error = make_error(kind, value, limit, direction);
+  if (!error) reader.fail(node, key, error.error().reason);
+  return *error;
 }
 
 // The settings of one valve, or of every valve (`defaults:`, which has no serial).

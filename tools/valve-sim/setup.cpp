@@ -4,6 +4,7 @@
 #include <string>
 
 #include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/sim/valve_bank.hpp"
 
 namespace teejet::sim {
@@ -111,9 +112,12 @@ Result<Setup> compose_setup(const CommandLine& command_line, const ConfigFile& f
       } else if (hotplug_serials.contains(serial_error.serial)) {
         setup.hotplug_errors.push_back(serial_error);
       } else {
-        return setup_error("error " + std::string(to_string(serial_error.error.kind)) + " for " +
-                           codec::format_serial(serial_error.serial) +
-                           ", which is not a simulated valve");
+        std::string reason = "error ";
+        reason.append(codec::error_kind(serial_error.error))
+            .append(" for ")
+            .append(codec::format_serial(serial_error.serial))
+            .append(", which is not a simulated valve");
+        return setup_error(std::move(reason));
       }
     }
   }

@@ -6,12 +6,10 @@
 #include <cmath>
 #include <sstream>
 
-#include "teejet/client/command_check.hpp"
 #include "exit_codes.hpp"
-#include "teejet/client/names.hpp"
-#include "teejet/codec/codec.hpp"
+#include "teejet/client/command_check.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/command_line.hpp"
-#include "teejet/dds/conversions.hpp"
 #include "teejet/dds/participant.hpp"
 
 namespace teejet::valvectl {
@@ -70,6 +68,16 @@ struct Parser {
 };
 
 [[noreturn]] void usage_error(const std::string& message) { throw CLI::ValidationError(message); }
+
+// What `request` asks for, as the codec names it (older words are accepted too: run-time, dps).
+std::string telemetry_words() {
+  std::string words;
+  for (const std::string_view name : codec::telemetry_names()) {
+    if (!words.empty()) words += ' ';
+    words += name;
+  }
+  return words;
+}
 
 // Durations are whole milliseconds, at least one and at most `max_seconds`: an hour for the
 // waits, a day for a watch. Beyond that a deadline is no longer a deadline, and far beyond it
@@ -207,11 +215,7 @@ void define(Parser& parser) {
 
   parser.request = app.add_subcommand("request", "ask a valve to send a value");
   add_serial(parser.request, raw);
-  parser.request
-      ->add_option("WHAT", raw.what,
-                   "version position temperature voltage current dps speed run-time "
-                   "cycle-counts")
-      ->required();
+  parser.request->add_option("WHAT", raw.what, telemetry_words())->required();
   parser.request
       ->add_option("--every", raw.every_tenths,
                    "resend automatically every TENTHS of a second, 1 to 255; 0 = once")
@@ -236,46 +240,28 @@ std::uint32_t checked_serial(const std::string& text) {
   return *serial;
 }
 
-Direction checked_direction(const std::string& word, bool allow_shortest) {
-  const auto direction = parse_direction(word, allow_shortest);
-  if (!direction) {
-    usage_error("--direction '" + word + "' is not " +
-                (allow_shortest ? "open, close or shortest" : "open or close"));
-  }
-  return *direction;
-}
-
-codec::Direction drive_direction_option(const std::string& word) {
-  return drive_direction(checked_direction(word, /*allow_shortest=*/false));
-}
-
-codec::TargetDirection target_direction_option(const std::string& word) {
-  return target_direction(checked_direction(word, /*allow_shortest=*/true));
-}
-
 // The options that carry each field of the protocol's messages.
-constexpr std::array<std::pair<std::string_view, std::string_view>, 5> kOptionOfField{{
+constexpr std::array<std::pair<std::string_view, std::string_view>, 6> kOptionOfField{{
     {"speed_percent", "--speed"},
+    {"direction", "--direction"},
     {"degrees", "--to"},
     {"milliseconds", "--ms"},
     {"resend_tenths", "--every"},
     {"bit_rate", "--set"},
 }};
 
-// The command for `message`, once the codec has checked every value against the sheet, as the
-// gateway will. The codec names the field ("speed_percent 101 is outside 0 to 100"); the person
-// typed an option, so the message names that instead.
-ValveCommand checked(const codec::ToValveMessage& message) {
-  auto command = checked_command(message);
-  if (command) return *command;
-  std::string reason = command.error().reason;
+// The command for `message` with `fields` set, once the codec has checked every value against
+// the sheet, as the gateway will. The codec names the field it refused; the person typed an
+// option, so the message names that instead.
+ValveCommand checked(const codec::ToValveMessage& message, const FieldValues& fields = {}) {
+  auto command = with_fields(message, fields);
+  auto checked_one = command ? checked_command(*command) : Result<ValveCommand>(command.error());
+  if (checked_one) return *checked_one;
+  const Error& error = checked_one.error();
   for (const auto& [field, option] : kOptionOfField) {
-    if (reason.starts_with(std::string(field) + " ")) {
-      reason.replace(0, field.size(), option);
-      break;
-    }
+    if (error.field == field) usage_error(std::string(option) + " " + error.complaint);
   }
-  usage_error(reason);
+  usage_error(error.reason);
 }
 
 void build_command(Parser& parser, CLI::App* used) {
@@ -293,16 +279,20 @@ void build_command(Parser& parser, CLI::App* used) {
   }
   if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
 
+  const std::int64_t speed = raw.speed;
   if (used == parser.move) {
-    command = checked(
-        codec::TargetDegrees{raw.speed, target_direction_option(raw.direction), raw.degrees});
+    command =
+        checked(codec::TargetDegrees{},
+                {{"speed_percent", speed}, {"direction", raw.direction}, {"degrees", raw.degrees}});
   } else if (used == parser.stop) {
     command = checked(codec::Stop{});
   } else if (used == parser.manual) {
-    command = checked(codec::Manual{raw.speed, drive_direction_option(raw.direction)});
+    command = checked(codec::Manual{}, {{"speed_percent", speed}, {"direction", raw.direction}});
   } else if (used == parser.jog) {
-    command = checked(codec::MillisecondsToRun{raw.speed, drive_direction_option(raw.direction),
-                                               raw.milliseconds});
+    command =
+        checked(codec::MillisecondsToRun{}, {{"speed_percent", speed},
+                                             {"direction", raw.direction},
+                                             {"milliseconds", std::int64_t{raw.milliseconds}}});
     // The run itself may take longer than the default backstop.
     if (parser.wait_timeout->count() == 0) {
       request.wait_timeout += std::chrono::milliseconds(raw.milliseconds);
@@ -310,29 +300,21 @@ void build_command(Parser& parser, CLI::App* used) {
   } else if (used == parser.clear_errors) {
     command = checked(codec::ClearErrors{});
   } else if (used == parser.request) {
-    const auto telemetry = parse_telemetry(raw.what);
-    if (!telemetry) {
-      usage_error("request: '" + raw.what +
-                  "' is not one of version position temperature voltage current dps speed "
-                  "run-time cycle-counts");
+    const auto asked = codec::telemetry_request(raw.what);
+    if (!asked) usage_error("request: '" + raw.what + "' is not one of " + telemetry_words());
+    const bool resends = codec::find_field(codec::describe(*asked), "resend_tenths") != nullptr;
+    if (!resends && raw.every_tenths != 0) {
+      usage_error("request " + std::string(codec::subject(*asked)) +
+                  ": a valve sends it once; --every is not allowed");
     }
-    if (*telemetry == TELEMETRY_VERSION && raw.every_tenths != 0) {
-      usage_error("request version: a valve sends its version once; --every is not allowed");
-    }
-    // Every request of the sheet has the same period field: the codec checks it on one.
-    (void)checked(codec::RequestPosition{raw.every_tenths});
-    ValveCommand asked;
-    asked.kind(COMMAND_REQUEST);
-    asked.telemetry(*telemetry);
-    asked.resend_tenths(static_cast<std::uint8_t>(raw.every_tenths));
-    const auto message = dds::to_message(asked);
-    if (!message) usage_error(message.error().reason);
-    command = checked(*message);
+    command = resends ? checked(*asked, {{"resend_tenths", std::int64_t{raw.every_tenths}}})
+                      : checked(*asked);
   } else if (used == parser.baud) {
     const bool set = parser.bit_rate->count() > 0;
     if (set == raw.baud_request) usage_error("baud: give either --request or --set RATE");
-    command = checked(set ? codec::BaudRate{codec::BaudAction::kSet, raw.bit_rate}
-                          : codec::BaudRate{codec::BaudAction::kRequest, codec::kBitRate250k});
+    command = set ? checked(codec::BaudRate{codec::BaudAction::kSet, codec::kBitRate250k},
+                            {{"bit_rate", std::int64_t{raw.bit_rate}}})
+                  : checked(codec::BaudRate{codec::BaudAction::kRequest, codec::kBitRate250k});
   }
 }
 

@@ -5,8 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "teejet/client/names.hpp"
-#include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/dds/names.hpp"
 
 namespace teejet::valvectl {
@@ -23,7 +22,7 @@ std::string errors_text(const std::set<ErrorKind>& errors) {
   std::string text;
   for (const ErrorKind kind : errors) {
     if (!text.empty()) text += ',';
-    text += to_string(kind);
+    text += dds::to_string(kind);
   }
   return text;
 }
@@ -64,9 +63,9 @@ std::string render_table(const std::vector<ValveRow>& rows) {
         codec::format_serial(row.serial),
         address_text(row.address),
         row.boot_mode ? "boot" : (row.online ? "yes" : "no"),
-        row.position_degrees ? one_decimal(*row.position_degrees) : "-",
-        row.temperature_c ? std::to_string(*row.temperature_c) : "-",
-        row.volts ? one_decimal(*row.volts) : "-",
+        row.position_degrees() ? one_decimal(*row.position_degrees()) : "-",
+        row.temperature_c() ? std::to_string(*row.temperature_c()) : "-",
+        row.volts() ? one_decimal(*row.volts()) : "-",
         errors_text(row.errors),
         row.gateway,
     });
@@ -100,7 +99,7 @@ std::string render_gateways(const std::vector<GatewaySummary>& gateways) {
   for (const GatewaySummary& gateway : gateways) {
     out << "gateway " << gateway.name;
     if (!gateway.can_interface.empty()) out << " on " << gateway.can_interface;
-    out << ": " << to_string(gateway.bus_state) << ", " << gateway.valves_online << '/'
+    out << ": " << dds::to_string(gateway.bus_state) << ", " << gateway.valves_online << '/'
         << gateway.valves_known << " valves online, " << gateway.frames_in << " frames in, "
         << gateway.frames_out << " out, " << gateway.decode_errors << " decode errors\n";
   }
@@ -124,19 +123,20 @@ nlohmann::json position_json(std::uint32_t serial, double degrees) {
   return {{"event", "position"}, {"serial", codec::format_serial(serial)}, {"degrees", degrees}};
 }
 
-std::string reply_text(std::uint32_t serial, const std::string& name, const Reply& reply) {
-  std::string text = codec::format_serial(serial) + ' ' + name;
-  for (const auto& [field, value] : reply.values.items()) {
-    text += ' ' + field + '=' + scalar_text(value);
-  }
+std::string reply_text(std::uint32_t serial, const Reply& reply) {
+  std::string text =
+      codec::format_serial(serial) + ' ' + std::string(codec::subject(reply.message));
+  codec::for_each_field(reply.message, [&](std::string_view field, const codec::FieldValue& value) {
+    text += ' ' + std::string(field) + '=' + scalar_text(to_json(value));
+  });
   return text;
 }
 
-nlohmann::json reply_json(std::uint32_t serial, const std::string& name, const Reply& reply) {
+nlohmann::json reply_json(std::uint32_t serial, const Reply& reply) {
   return {{"event", "reply"},
           {"serial", codec::format_serial(serial)},
-          {"reply", name},
-          {"values", reply.values},
+          {"reply", codec::subject(reply.message)},
+          {"values", fields_json(reply.message)},
           {"received_ns", reply.received_ns}};
 }
 

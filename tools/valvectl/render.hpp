@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "teejet/valve.h"
 #include "teejet/client/json.hpp"
 #include "teejet/client/valve_table.hpp"
+#include "teejet/valve.h"
 
 namespace teejet::valvectl {
 
@@ -27,9 +27,10 @@ std::string status_text(const CommandStatus& status);
 std::string position_text(std::uint32_t serial, double degrees);
 nlohmann::json position_json(std::uint32_t serial, double degrees);
 
-// "TJV000006 voltage volts=12.0"; {"event":"reply","serial":..,"reply":"voltage","values":{..}}
-std::string reply_text(std::uint32_t serial, const std::string& name, const Reply& reply);
-nlohmann::json reply_json(std::uint32_t serial, const std::string& name, const Reply& reply);
+// "TJV000006 voltage volts=12.0"; {"event":"reply","serial":..,"reply":"voltage","values":{..}}:
+// the reply's subject and fields as the codec names them.
+std::string reply_text(std::uint32_t serial, const Reply& reply);
+nlohmann::json reply_json(std::uint32_t serial, const Reply& reply);
 
 // One decimal, as the wire resolves degrees and volts: 45 -> "45.0".
 std::string one_decimal(double value);

@@ -10,11 +10,12 @@
 #include <variant>
 #include <vector>
 
-#include "teejet/client/command_client.hpp"
 #include "exit_codes.hpp"
 #include "render.hpp"
-#include "teejet/codec/codec.hpp"
+#include "teejet/client/command_client.hpp"
 #include "teejet/client/valve_view.hpp"
+#include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
 
 namespace teejet::valvectl {
 
@@ -41,11 +42,14 @@ bool shows_progress(CommandKind kind) {
          kind == COMMAND_MILLISECONDS_TO_RUN;
 }
 
-// The reply a completed command's answer arrives as, if it has one.
+// The subject of the reply a completed request's answer arrives as, if it is a request.
 std::optional<std::string> awaited_reply(const ValveCommand& command) {
-  if (command.kind() == COMMAND_REQUEST) return reply_name(command.telemetry());
-  if (command.kind() == COMMAND_REQUEST_BAUD_RATE) return std::string(kBaudRateReply);
-  return std::nullopt;
+  if (command.kind() != COMMAND_REQUEST && command.kind() != COMMAND_REQUEST_BAUD_RATE) {
+    return std::nullopt;
+  }
+  const auto message = dds::to_message(command);
+  if (!message) return std::nullopt;
+  return std::string(codec::subject(*message));
 }
 
 std::string seconds_text(milliseconds duration) {
@@ -335,8 +339,9 @@ class Session {
 
   void show_position(std::uint32_t serial, std::optional<double>& shown) {
     const auto row = view_.snapshot().row(serial);
-    if (!row || !row->position_degrees || row->position_degrees == shown) return;
-    shown = row->position_degrees;
+    const auto position = row ? row->position_degrees() : std::nullopt;
+    if (!position || position == shown) return;
+    shown = position;
     emit(position_text(serial, *shown), position_json(serial, *shown));
   }
 
@@ -350,7 +355,7 @@ class Session {
     };
     if (!view_.wait_until(fresh, Clock::now() + kReplyGrace, terminal_.interrupted)) return;
     const Reply reply = *view_.snapshot().reply(serial, *name);
-    emit(reply_text(serial, *name, reply), reply_json(serial, *name, reply));
+    emit(reply_text(serial, reply), reply_json(serial, reply));
   }
 
   Session(const Invocation& invocation, const Terminal& terminal,

@@ -439,6 +439,27 @@ const MessageInfo& describe(const FromValveMessage& message) {
   return detail::tables().from_valve.at(message.index());
 }
 
+std::optional<ToValveMessage> to_valve_message(std::uint8_t id) {
+  const auto& messages = detail::tables().to_valve;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (messages[i].id == id) return detail::blank(std::type_identity<ToValveMessage>{}, i);
+  }
+  return std::nullopt;
+}
+
+std::optional<FromValveMessage> from_valve_message(std::uint8_t id) {
+  const auto& messages = detail::tables().from_valve;
+  for (std::size_t i = 0; i < messages.size(); ++i) {
+    if (messages[i].id == id) return detail::blank(std::type_identity<FromValveMessage>{}, i);
+  }
+  return std::nullopt;
+}
+
+std::optional<FromValveMessage> reply_to(const ToValveMessage& request) {
+  const auto reply = describe(request).reply;
+  return reply ? from_valve_message(*reply) : std::nullopt;
+}
+
 const FieldInfo* find_field(const MessageInfo& message, std::string_view name) {
   for (const FieldInfo& field : message.fields) {
     if (field.name == name) return &field;
@@ -493,6 +514,20 @@ std::optional<FieldValue> field_value(const ToValveMessage& message, std::string
 
 std::optional<FieldValue> field_value(const FromValveMessage& message, std::string_view field) {
   return detail::field_value_of(message, field);
+}
+
+FromValveMessage as_sent(const FromValveMessage& message) {
+  const auto frame = encode(kFirstValveAddress, message);
+  if (!frame) return message;
+  auto decoded = decode_from_valve(frame->payload());
+  return decoded ? std::move(decoded).value() : message;
+}
+
+ToValveMessage as_sent(const ToValveMessage& message) {
+  const auto frame = encode(kFirstValveAddress, message);
+  if (!frame) return message;
+  auto decoded = decode_to_valve(frame->payload());
+  return decoded ? std::move(decoded).value() : message;
 }
 
 Status check_valve_limits(double closed_degrees, double opened_degrees) {

@@ -383,8 +383,10 @@ struct EnumField {
       }
     }
     std::string words;
-    for (const auto& entry : kEntries<E>)
-      words += (words.empty() ? "" : ", ") + std::string(entry.name);
+    for (const auto& entry : kEntries<E>) {
+      if (!words.empty()) words += ", ";
+      words += entry.name;
+    }
     return invalid_field(name, describe_value(value) + " is not one of " + words);
   }
 

@@ -116,7 +116,7 @@ class TypedReader final : public TopicReader {
 
  private:
   DataReader* reader_;
-  typename dds::topics::TopicOf<Sample>::PubSubType type_;
+  typename PubSubTypeOf<Sample>::type type_;
 };
 
 template <class Sample>
@@ -166,13 +166,12 @@ class TypedWriter final : public TopicWriter {
   }
 
   DataWriter* writer_;
-  typename dds::topics::TopicOf<Sample>::PubSubType type_;
+  typename PubSubTypeOf<Sample>::type type_;
 };
 
 template <class Sample>
 Result<std::unique_ptr<TopicReader>> open_reader(dds::Participant& participant, Kind kind) {
-  using Topic = dds::topics::TopicOf<Sample>;
-  auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+  auto topic = dds::topics::topic_of<Sample>(participant);
   if (!topic) return topic.error();
   // No listener: the recorder waits on the readers' status conditions.
   auto reader = participant.reader(*topic, recorder_qos(kind), nullptr, StatusMask::none());
@@ -182,20 +181,28 @@ Result<std::unique_ptr<TopicReader>> open_reader(dds::Participant& participant, 
 
 template <class Sample>
 Result<std::unique_ptr<TopicWriter>> open_writer(dds::Participant& participant, Kind kind) {
-  using Topic = dds::topics::TopicOf<Sample>;
-  auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+  auto topic = dds::topics::topic_of<Sample>(participant);
   if (!topic) return topic.error();
   auto writer = participant.writer(*topic, replayer_qos(kind));
   if (!writer) return writer.error();
   return std::unique_ptr<TopicWriter>(std::make_unique<TypedWriter<Sample>>(*writer));
 }
 
-template <class Sample, Kind kKind>
-TopicType entry(const char* type_name, bool keyed = true) {
+// Commands and frames are events, statuses are kept 32 deep; everything else is state.
+template <class Sample>
+constexpr Kind kKindOf = std::is_same_v<Sample, ValveCommand>    ? Kind::kCommand
+                         : std::is_same_v<Sample, CommandStatus> ? Kind::kCommandStatus
+                         : std::is_same_v<Sample, BusFrame>      ? Kind::kFrame
+                                                                 : Kind::kState;
+
+template <class Sample>
+TopicType entry() {
+  constexpr Kind kKind = kKindOf<Sample>;
+  const typename PubSubTypeOf<Sample>::type type;
   return TopicType{
-      .topic = dds::topics::TopicOf<Sample>::kName,
-      .type_name = type_name,
-      .keyed = keyed,
+      .topic = dds::topics::topic_name<Sample>(),
+      .type_name = type.getName(),
+      .keyed = type.m_isGetKeyDefined,
       .durable = kKind == Kind::kState || kKind == Kind::kCommandStatus,
       .open_reader =
           [](dds::Participant& participant) { return open_reader<Sample>(participant, kKind); },
@@ -203,27 +210,15 @@ TopicType entry(const char* type_name, bool keyed = true) {
           [](dds::Participant& participant) { return open_writer<Sample>(participant, kKind); }};
 }
 
+template <class... Samples>
+std::vector<TopicType> entries(dds::topics::SampleTypes<Samples...>) {
+  return {entry<Samples>()...};
+}
+
 }  // namespace
 
 const std::vector<TopicType>& topic_types() {
-  static const std::vector<TopicType> kTypes = {
-      entry<ValvePresence, Kind::kState>("teejet::ValvePresence"),
-      entry<ValvePosition, Kind::kState>("teejet::ValvePosition"),
-      entry<ValveVersion, Kind::kState>("teejet::ValveVersion"),
-      entry<ValveTemperature, Kind::kState>("teejet::ValveTemperature"),
-      entry<ValveVoltage, Kind::kState>("teejet::ValveVoltage"),
-      entry<ValveCurrent, Kind::kState>("teejet::ValveCurrent"),
-      entry<ValveDegreesPerSecond, Kind::kState>("teejet::ValveDegreesPerSecond"),
-      entry<ValveSpeedDirection, Kind::kState>("teejet::ValveSpeedDirection"),
-      entry<ValveRunTime, Kind::kState>("teejet::ValveRunTime"),
-      entry<ValveCycleCount, Kind::kState>("teejet::ValveCycleCount"),
-      entry<ValveBaudRate, Kind::kState>("teejet::ValveBaudRate"),
-      entry<ValveError, Kind::kState>("teejet::ValveError"),
-      entry<ValveCommand, Kind::kCommand>("teejet::ValveCommand"),
-      entry<CommandStatus, Kind::kCommandStatus>("teejet::CommandStatus"),
-      entry<GatewayStatus, Kind::kState>("teejet::GatewayStatus"),
-      entry<BusFrame, Kind::kFrame>("teejet::BusFrame", /*keyed=*/false),
-  };
+  static const std::vector<TopicType> kTypes = entries(dds::topics::EverySampleType{});
   return kTypes;
 }
 

@@ -3,7 +3,7 @@
 #include <map>
 #include <sstream>
 
-#include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/yaml/reader.hpp"
 
@@ -27,30 +27,34 @@ std::string format_seconds(Duration duration) {
   return text.str();
 }
 
-std::string poll_name(const codec::ToValveMessage& request) {
-  // "request_position" -> "position": the key of the poll section.
-  return std::string(codec::message_name(request).substr(std::string_view("request_").size()));
+// A field's range as the codec's table gives it.
+template <class Message>
+const codec::FieldInfo& field_of(const Message& message, std::string_view name) {
+  return *codec::find_field(codec::describe(message), name);
 }
 
-// poll: {version: once, position: 1, temperature: 10, run_time: off, ...}
+// Degrees as a valve's position can be: 0 to 359.9.
+double max_position_degrees() { return field_of(codec::TargetDegrees{}, "degrees").max; }
+
+// poll: {version: once, position: 1, temperature: 10, run_time: off, ...}: the keys are the
+// codec's telemetry names, so every telemetry request of the table can be polled.
 std::vector<codec::ToValveMessage> read_poll(const Reader& reader, const YAML::Node& node) {
-  // Starts from the default schedule, so that a file naming one entry changes only that one;
-  // the keys are the schedule's own names.
-  std::vector<std::optional<codec::ToValveMessage>> schedule;
-  std::map<std::string, std::size_t> index;
+  // Starts from the default schedule, so that a file naming one entry changes only that one.
+  std::map<std::string_view, std::optional<codec::ToValveMessage>> schedule;
   for (const auto& request : bridge::default_poll_schedule()) {
-    index[poll_name(request)] = schedule.size();
-    schedule.emplace_back(request);
+    schedule[codec::subject(request)] = request;
   }
-  reader.expect_keys(node, "poll",
-                     {"version", "position", "temperature", "voltage", "current",
-                      "degrees_per_second", "speed_direction", "run_time", "cycle_counts"});
+  const auto& names = codec::telemetry_names();
+  reader.expect_keys(node, "poll", names);
   for (const auto& entry : node) {
     const auto name = entry.first.Scalar();
     const auto key = "poll." + name;
-    auto& slot = schedule.at(index.at(name));
-    if (name == "version") {
-      if (reader.word(entry.second, key, {"once", "off"}) == "off") slot.reset();
+    auto request = *codec::telemetry_request(name);
+    auto& slot = schedule[codec::subject(request)];
+    const auto* resend = codec::find_field(codec::describe(request), "resend_tenths");
+    if (resend == nullptr) {  // sent once by the valve: polled once or not at all
+      slot.reset();
+      if (reader.word(entry.second, key, {"once", "off"}) == "once") slot = request;
       continue;
     }
     const auto text = reader.scalar(entry.second, key);
@@ -58,19 +62,19 @@ std::vector<codec::ToValveMessage> read_poll(const Reader& reader, const YAML::N
       slot.reset();
       continue;
     }
-    const auto tenths = text == "once" ? 0 : reader.integer(entry.second, key, 0, 255);
-    auto request = bridge::default_poll_schedule().at(index.at(name));
-    std::visit(
-        [&](auto& m) {
-          if constexpr (requires { m.resend_tenths; })
-            m.resend_tenths = static_cast<unsigned>(tenths);
-        },
-        request);
+    const auto tenths =
+        text == "once" ? 0
+                       : reader.integer(entry.second, key, 0, static_cast<long long>(resend->max));
+    if (auto set = codec::set_field(request, "resend_tenths", std::int64_t{tenths}); !set) {
+      reader.fail(entry.second, key, set.error().complaint);
+    }
     slot = request;
   }
   std::vector<codec::ToValveMessage> out;
-  for (const auto& entry : schedule) {
-    if (entry) out.push_back(*entry);
+  for (const std::string_view name : names) {
+    if (const auto it = schedule.find(name); it != schedule.end() && it->second) {
+      out.push_back(*it->second);
+    }
   }
   return out;
 }
@@ -80,14 +84,18 @@ bridge::ValveLimits read_limits(const Reader& reader, const YAML::Node& node,
   reader.expect_keys(node, section, {"closed_deg", "opened_deg"});
   bridge::ValveLimits limits;
   if (node["closed_deg"]) {
-    limits.closed_degrees = reader.number(node["closed_deg"], section + ".closed_deg", 0, 359.9);
+    limits.closed_degrees =
+        reader.number(node["closed_deg"], section + ".closed_deg", 0, max_position_degrees());
   }
   if (node["opened_deg"]) {
-    limits.opened_degrees = reader.number(node["opened_deg"], section + ".opened_deg", 0, 360);
+    limits.opened_degrees = reader.number(node["opened_deg"], section + ".opened_deg", 0,
+                                          codec::kFullTurnOpenedDegrees);
   }
-  if (!(limits.closed_degrees < limits.opened_degrees &&
-        (limits.opened_degrees <= 340 || limits.opened_degrees == 360))) {
-    reader.fail(node, section, "need 0 <= closed_deg < opened_deg, opened_deg <= 340 or = 360");
+  if (const auto valid = codec::check_valve_limits(limits.closed_degrees, limits.opened_degrees);
+      !valid) {
+    const bool closed = valid.error().field == "closed_degrees";
+    const char* key = closed ? "closed_deg" : "opened_deg";
+    reader.fail(node[key] ? node[key] : node, section + "." + key, valid.error().complaint);
   }
   return limits;
 }
@@ -194,12 +202,17 @@ void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& co
     config.sim_first_serial = *serial;
   }
   // The simulator checks the combination (closed below opened, ...) when it starts.
-  if (s["dps"]) config.sim_degrees_per_second = reader.number(s["dps"], "simulator.dps", 1, 359);
+  if (s["dps"]) {
+    config.sim_degrees_per_second =
+        reader.number(s["dps"], "simulator.dps", 1, field_of(codec::DegreesPerSecond{}, "dps").max);
+  }
   if (s["closed_deg"]) {
-    config.sim_closed_degrees = reader.number(s["closed_deg"], "simulator.closed_deg", 0, 359.9);
+    config.sim_closed_degrees =
+        reader.number(s["closed_deg"], "simulator.closed_deg", 0, max_position_degrees());
   }
   if (s["opened_deg"]) {
-    config.sim_opened_degrees = reader.number(s["opened_deg"], "simulator.opened_deg", 0, 360);
+    config.sim_opened_degrees =
+        reader.number(s["opened_deg"], "simulator.opened_deg", 0, codec::kFullTurnOpenedDegrees);
   }
   if (const auto errors = s["errors"]) {
     reader.expect_list(errors, "simulator.errors", "errors (SERIAL:KIND:VALUE:LIMIT[:DIRECTION])");

@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "teejet/codec/table.hpp"
+
 namespace teejet::sim {
 namespace {
 
@@ -35,11 +37,6 @@ struct Overloaded : Ts... {
 };
 template <class... Ts>
 Overloaded(Ts...) -> Overloaded<Ts...>;
-
-template <class T>
-struct IsTelemetryRequest : std::false_type {};
-template <std::uint8_t Id>
-struct IsTelemetryRequest<codec::TelemetryRequest<Id>> : std::true_type {};
 
 }  // namespace
 
@@ -205,56 +202,87 @@ void SimulatedValve::run_milliseconds(const codec::MillisecondsToRun& command, S
 
 // ---- Messages ---------------------------------------------------------------------------------
 
-codec::FromValveMessage SimulatedValve::telemetry(std::uint8_t request_id, SteadyTime now) const {
-  switch (request_id) {
-    case codec::RequestPosition::kId: {
-      auto tenths = std::llround(position(now) * 10.0);
-      tenths =
-          config_.full_turn() ? (tenths % 3600 + 3600) % 3600 : std::clamp(tenths, 0LL, 3599LL);
-      return codec::Position{static_cast<double>(tenths) / 10.0};
-    }
-    case codec::RequestTemperature::kId:
-      return codec::Temperature{config_.valve_temperature_c, config_.sensor_temperature_c};
-    case codec::RequestVoltage::kId:
-      return codec::Voltage{config_.volts};
-    case codec::RequestCurrent::kId: {
-      const unsigned speed = speed_percent(now);
-      return codec::RunCurrent{config_.running_amps * speed / 100.0,
-                               ran_at_full_speed(now) ? config_.running_amps : 0.0};
-    }
-    case codec::RequestDegreesPerSecond::kId:
-      return codec::DegreesPerSecond{static_cast<unsigned>(std::lround(config_.degrees_per_second)),
-                                     direction_};
-    case codec::RequestSpeedDirection::kId:
-      return codec::SpeedDirection{speed_percent(now), direction_, config_.opening_direction};
-    case codec::RequestRunTime::kId: {
-      const auto whole = std::chrono::duration_cast<std::chrono::seconds>(run_time(now)).count();
-      return codec::RunTime{static_cast<std::uint32_t>(
-          std::min<long long>(whole, std::numeric_limits<std::uint32_t>::max()))};
-    }
-    case codec::RequestCycleCounts::kId:
-      return codec::CycleCounts{cycle_count_};
-    default:
-      throw std::invalid_argument("not a telemetry request id");
-  }
+void SimulatedValve::report(codec::VersionInfo& reply, SteadyTime) const {
+  reply = {config_.application_version, config_.bootloader_version};
 }
 
-void SimulatedValve::request(std::uint8_t request_id, unsigned resend_tenths, SteadyTime now,
+void SimulatedValve::report(codec::Position& reply, SteadyTime now) const {
+  auto tenths = std::llround(position(now) * 10.0);
+  tenths = config_.full_turn() ? (tenths % 3600 + 3600) % 3600 : std::clamp(tenths, 0LL, 3599LL);
+  reply.degrees = static_cast<double>(tenths) / 10.0;
+}
+
+void SimulatedValve::report(codec::Temperature& reply, SteadyTime) const {
+  reply = {config_.valve_temperature_c, config_.sensor_temperature_c};
+}
+
+void SimulatedValve::report(codec::Voltage& reply, SteadyTime) const {
+  reply.volts = config_.volts;
+}
+
+void SimulatedValve::report(codec::RunCurrent& reply, SteadyTime now) const {
+  reply = {config_.running_amps * speed_percent(now) / 100.0,
+           ran_at_full_speed(now) ? config_.running_amps : 0.0};
+}
+
+void SimulatedValve::report(codec::DegreesPerSecond& reply, SteadyTime) const {
+  reply = {static_cast<unsigned>(std::lround(config_.degrees_per_second)), direction_};
+}
+
+void SimulatedValve::report(codec::SpeedDirection& reply, SteadyTime now) const {
+  reply = {speed_percent(now), direction_, config_.opening_direction};
+}
+
+void SimulatedValve::report(codec::RunTime& reply, SteadyTime now) const {
+  const auto whole = std::chrono::duration_cast<std::chrono::seconds>(run_time(now)).count();
+  reply.seconds = static_cast<std::uint32_t>(
+      std::min<long long>(whole, std::numeric_limits<std::uint32_t>::max()));
+}
+
+void SimulatedValve::report(codec::CycleCounts& reply, SteadyTime) const {
+  reply.count = cycle_count_;
+}
+
+void SimulatedValve::report(codec::BaudRateReply& reply, SteadyTime) const {
+  reply.bit_rate = bit_rate_;
+}
+
+std::optional<codec::FromValveMessage> SimulatedValve::reply_to(
+    const codec::ToValveMessage& request, SteadyTime now) const {
+  auto reply = codec::reply_to(request);
+  if (!reply) return std::nullopt;
+  // A reply without a report() overload answers with every field zero.
+  std::visit(
+      [&](auto& message) {
+        if constexpr (requires { report(message, now); }) report(message, now);
+      },
+      *reply);
+  return reply;
+}
+
+void SimulatedValve::set_bit_rate(const codec::BaudRate& message) {
+  if (message.action == codec::BaudAction::kSet) bit_rate_ = message.bit_rate;
+}
+
+void SimulatedValve::request(const codec::ToValveMessage& message, SteadyTime now,
                              std::vector<codec::FromValveMessage>& replies) {
-  replies.push_back(telemetry(request_id, now));
-  auto& resend = resends_[request_id - kFirstTelemetryRequest];
-  if (resend_tenths == 0) {
-    resend.reset();  // once, and a running resend of this kind ends
+  if (auto reply = reply_to(message, now)) replies.push_back(*std::move(reply));
+  const auto resend = codec::field_value(message, "resend_tenths");
+  if (!resend) return;  // sent once, by the sheet (Request Version)
+  const auto tenths = std::get<std::int64_t>(*resend);
+  const auto id = codec::message_id(message);
+  if (tenths == 0) {
+    resends_.erase(id);  // once, and a running resend of this kind ends
   } else {
-    const Duration period = resend_tenths * kTenthOfSecond;
-    resend = Periodic{period, now + period};
+    const Duration period = tenths * kTenthOfSecond;
+    resends_.insert_or_assign(id, Periodic{message, period, now + period});
   }
 }
 
 void SimulatedValve::power_off(SteadyTime now) {
   halt(now);
-  resends_ = {};
-  errors_ = {};
+  resends_.clear();
+  errors_.clear();
   next_i_am_here_.reset();
   direction_ = codec::Direction::kClose;
   ran_at_full_speed_ = false;
@@ -275,12 +303,11 @@ std::vector<codec::FromValveMessage> SimulatedValve::handle(const codec::ToValve
   if (boot_mode_) {
     // Boot code identifies itself and keeps the bus settings; the application (motion,
     // telemetry) does not run. Stop and Clear Errors have nothing to act on.
-    if (const auto* version = std::get_if<codec::RequestVersion>(&message); version != nullptr) {
-      replies.push_back(
-          codec::VersionInfo{config_.application_version, config_.bootloader_version});
-    } else if (const auto* baud = std::get_if<codec::BaudRate>(&message); baud != nullptr) {
-      if (baud->action == codec::BaudAction::kSet) bit_rate_ = baud->bit_rate;
-      replies.push_back(codec::BaudRateReply{bit_rate_});
+    if (const auto* baud = std::get_if<codec::BaudRate>(&message)) {
+      set_bit_rate(*baud);
+      request(message, now, replies);
+    } else if (std::holds_alternative<codec::RequestVersion>(message)) {
+      request(message, now, replies);
     }
     return replies;
   }
@@ -290,22 +317,16 @@ std::vector<codec::FromValveMessage> SimulatedValve::handle(const codec::ToValve
                  [&](const codec::TargetDegrees& m) { run_target(m, now); },
                  [&](const codec::DegreesFromPosition& m) { run_degrees(m, now); },
                  [&](const codec::ClearErrors&) {
-                   for (auto& error : errors_) error.reset();
+                   errors_.clear();
                    halt(now);
                  },
                  [&](const codec::MillisecondsToRun& m) { run_milliseconds(m, now); },
-                 [&](const codec::RequestVersion&) {
-                   replies.push_back(
-                       codec::VersionInfo{config_.application_version, config_.bootloader_version});
-                 },
                  [&](const codec::BaudRate& m) {
-                   if (m.action == codec::BaudAction::kSet) bit_rate_ = m.bit_rate;
-                   replies.push_back(codec::BaudRateReply{bit_rate_});
+                   set_bit_rate(m);
+                   request(message, now, replies);
                  },
-                 [&](const auto& m) {
-                   static_assert(IsTelemetryRequest<std::decay_t<decltype(m)>>::value);
-                   request(std::decay_t<decltype(m)>::kId, m.resend_tenths, now, replies);
-                 },
+                 // Requests, as the codec's table says who answers them.
+                 [&](const auto&) { request(message, now, replies); },
              },
              message);
   return replies;
@@ -315,20 +336,17 @@ void SimulatedValve::schedule_i_am_here(SteadyTime first) { next_i_am_here_ = fi
 
 void SimulatedValve::inject_error(const InjectedError& error, SteadyTime now) {
   if (const auto valid = validate(error); !valid) throw std::invalid_argument(valid.error().reason);
-  errors_[static_cast<std::size_t>(error.kind)] = Latched{error, now};
+  errors_.insert_or_assign(codec::message_id(error), Latched{error, now});
 }
 
-bool SimulatedValve::error_latched(ErrorKind kind) const {
-  return errors_[static_cast<std::size_t>(kind)].has_value();
+bool SimulatedValve::error_latched(std::string_view kind) const {
+  const auto message = codec::error_message(kind);
+  return message && errors_.contains(codec::message_id(*message));
 }
 
 std::optional<Duration> SimulatedValve::resend_period(std::uint8_t request_id) const {
-  if (request_id < kFirstTelemetryRequest ||
-      request_id >= kFirstTelemetryRequest + kTelemetryRequests) {
-    return std::nullopt;
-  }
-  const auto& resend = resends_[request_id - kFirstTelemetryRequest];
-  return resend ? std::optional(resend->period) : std::nullopt;
+  const auto resend = resends_.find(request_id);
+  return resend == resends_.end() ? std::nullopt : std::optional(resend->second.period);
 }
 
 std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
@@ -350,16 +368,11 @@ std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
       return codec::IAmHere{config_.part_number, config_.serial, boot_mode_};
     });
   }
-  for (auto& latched : errors_) {
-    if (latched) {
-      fire(latched->next, kErrorRepeatPeriod, [&] { return error_message(latched->error); });
-    }
+  for (auto& [id, latched] : errors_) {
+    fire(latched.next, kErrorRepeatPeriod, [&] { return latched.error; });
   }
-  for (std::size_t i = 0; i < resends_.size(); ++i) {
-    if (auto& resend = resends_[i]) {
-      fire(resend->next, resend->period,
-           [&] { return telemetry(static_cast<std::uint8_t>(kFirstTelemetryRequest + i), now); });
-    }
+  for (auto& [id, resend] : resends_) {
+    fire(resend.next, resend.period, [&] { return *reply_to(resend.request, now); });
   }
   std::stable_sort(due.begin(), due.end(), [](const Due& a, const Due& b) { return a.at < b.at; });
   std::vector<codec::FromValveMessage> messages;
@@ -374,12 +387,8 @@ std::optional<SteadyTime> SimulatedValve::next_due() const {
   auto consider = [&](SteadyTime at) {
     if (!earliest || at < *earliest) earliest = at;
   };
-  for (const auto& latched : errors_) {
-    if (latched) consider(latched->next);
-  }
-  for (const auto& resend : resends_) {
-    if (resend) consider(resend->next);
-  }
+  for (const auto& [id, latched] : errors_) consider(latched.next);
+  for (const auto& [id, resend] : resends_) consider(resend.next);
   return earliest;
 }
 

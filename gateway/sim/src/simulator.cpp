@@ -236,8 +236,20 @@ Status Simulator::inject_error(std::uint32_t serial, const InjectedError& error)
       return injected;
     }
   }
-  logger_->info("{}: {} error latched (value {}, limit {})", codec::format_serial(serial),
-                to_string(error.kind), error.value, error.limit);
+  std::string values;
+  codec::for_each_field(error, [&](std::string_view field, const codec::FieldValue& value) {
+    values += ' ';
+    values.append(field).append("=").append(std::visit(
+        [](const auto& v) {
+          if constexpr (std::is_same_v<std::decay_t<decltype(v)>, std::string>)
+            return v;
+          else
+            return fmt::format("{}", v);
+        },
+        value));
+  });
+  logger_->info("{}: {} error latched ({})", codec::format_serial(serial), codec::error_kind(error),
+                values.substr(1));
   return {};
 }
 

@@ -53,6 +53,11 @@ void Reader::expect_list(const YAML::Node& list, std::string_view key,
 
 void Reader::expect_keys(const YAML::Node& map, std::string_view section,
                          std::initializer_list<std::string_view> allowed) const {
+  expect_keys(map, section, std::span(allowed.begin(), allowed.size()));
+}
+
+void Reader::expect_keys(const YAML::Node& map, std::string_view section,
+                         std::span<const std::string_view> allowed) const {
   expect_mapping(map, section);
   for (const auto& entry : map) {
     const std::string key = entry.first.Scalar();

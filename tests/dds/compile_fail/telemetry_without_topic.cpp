@@ -1,6 +1,7 @@
 // Must NOT compile (tests/dds/CMakeLists.txt, test dds_telemetry_without_topic_does_not_compile):
 // issue 7, bug 6. A telemetry type added to the sample variant without a topic used to compile
-// and dereference a null writer at run time; now the writer table asks TopicOf<> for its topic.
+// and dereference a null writer at run time; now the writer table asks topics::topic_of<> for its
+// topic.
 
 #include <variant>
 

@@ -26,9 +26,9 @@ int main() {
   sample.online(true);
   teejet::client::ValveTable table;
   table.on_presence(sample);
-  table.on_position(serial, 123.4, 0);
+  table.on_telemetry(serial, teejet::codec::Position{123.4}, 0);
   const auto row = table.row(serial);
-  if (!row || !row->position_degrees) {
+  if (!row || !row->position_degrees()) {
     std::cerr << "the client's table lost the valve\n";
     return 1;
   }
@@ -37,6 +37,6 @@ int main() {
     std::cerr << "the client's command check let speed 101 through\n";
     return 1;
   }
-  std::cout << teejet::codec::format_serial(row->serial) << " " << *row->position_degrees << "\n";
+  std::cout << teejet::codec::format_serial(row->serial) << " " << *row->position_degrees() << "\n";
   return 0;
 }

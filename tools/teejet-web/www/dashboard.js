@@ -7,14 +7,16 @@
   const HISTORY_MS = 5 * 60 * 1000 + 10000;  // the longest plot window, and a little
   const COLORS = ["#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f", "#5d4037",
                   "#ad1457", "#827717", "#37474f"];
-  const UNITS = { position: "position (°)", amps: "current (A)", volts: "voltage (V)",
-                  temperature_c: "temperature (°C)" };
   const FINAL = new Set(["completed", "rejected", "timed_out", "superseded", "refused", "error"]);
 
   const valves = new Map();    // serial -> {data, card, history: [[t, json]], color}
   const gateways = new Map();  // name -> element
   const sentCommands = new Map();  // request id -> serials it was for (until answered)
   let policy = null;           // {allowed, token_required} from the snapshot
+  // What the valves tell and what commands take, from the codec's table (docs/web.md):
+  // {commands: {move: {degrees: {min, max, step, unit}, ...}, request: {telemetry: [...]}},
+  //  telemetry: {position: {degrees: {type, unit, step}}, current: {...}, ...}}.
+  let protocol = { commands: {}, telemetry: {} };
   let socket = null;
   let nextId = 1;
   let retryMs = 500;
@@ -51,6 +53,32 @@
   const dash = "—";
   const fixed = (v, digits, unit) => (v === null || v === undefined ? dash
                                       : `${Number(v).toFixed(digits)}${unit}`);
+  // Decimals a field's resolution needs: 0.1 -> 1, 0.01 -> 2, 1 -> 0.
+  const decimals = (step) => Math.max(0, Math.round(-Math.log10(step || 1)));
+  const withUnit = (unit) => (!unit ? "" : unit.startsWith("°") && unit !== "°C" && unit !== "°/s"
+                                                ? unit : ` ${unit}`);
+  function reading(value, field) {
+    if (value === null || value === undefined) return dash;
+    if (field && field.type === "number") return fixed(value, decimals(field.step), withUnit(field.unit));
+    return String(value);
+  }
+  // Every number the valves report, as "subject.field", for the plot.
+  function numericFields() {
+    const fields = [];
+    for (const [subject, described] of Object.entries(protocol.telemetry)) {
+      for (const [name, field] of Object.entries(described)) {
+        if (field.type === "number") fields.push({ key: `${subject}.${name}`, subject, name, field });
+      }
+    }
+    return fields;
+  }
+  const label = (subject, name, count) => (count > 1 ? `${subject} ${name}` : subject)
+    .replaceAll("_", " ");
+  function telemetryValue(data, key) {
+    const [subject, name] = key.split(".");
+    const told = data.telemetry && data.telemetry[subject];
+    return told ? told[name] ?? null : null;
+  }
 
   // ---- connection ----------------------------------------------------------------------------
 
@@ -106,7 +134,12 @@
 
   function onSnapshot(message) {
     const next = message.commands || { allowed: false, token_required: false };
-    if (!policy || policy.allowed !== next.allowed || policy.token_required !== next.token_required) {
+    const nextProtocol = message.protocol || { commands: {}, telemetry: {} };
+    const protocolChanged = JSON.stringify(nextProtocol) !== JSON.stringify(protocol);
+    protocol = nextProtocol;
+    if (protocolChanged) buildPlotFields();
+    if (!policy || policy.allowed !== next.allowed || policy.token_required !== next.token_required ||
+        protocolChanged) {
       // Another server (or another mode) behind the same address: rebuild every control.
       policy = next;
       for (const v of valves.values()) v.card.remove();
@@ -158,12 +191,17 @@
     const pick = el("input", { type: "checkbox", class: "plot-pick" });
     pick.checked = valves.size < 4;  // the first few are plotted until the operator chooses
     pick.addEventListener("change", requestPaint);
+    // One line per field the valves report (the position is the dial), then the target.
     const readings = el("dl", { class: "readings" });
-    for (const [key, label] of [["temperature", "temperature"], ["voltage", "voltage"],
-                                ["current", "current"], ["speed", "speed"],
-                                ["direction", "direction"], ["target", "target"]]) {
-      readings.append(el("dt", {}, label), el("dd", { class: key }, dash));
+    for (const [subject, described] of Object.entries(protocol.telemetry)) {
+      if (subject === "position") continue;
+      const names = Object.keys(described);
+      for (const name of names) {
+        readings.append(el("dt", {}, label(subject, name, names.length)),
+                        el("dd", { class: "telemetry", "data-key": `${subject}.${name}` }, dash));
+      }
     }
+    readings.append(el("dt", {}, "target"), el("dd", { class: "target" }, dash));
     const card = el("article", { class: "card", "data-serial": serial },
       el("header", {}, el("h2", {}, serial), el("label", { class: "hint" }, pick, " plot")),
       el("div", { class: "meta" }),
@@ -203,13 +241,11 @@
       target.setAttribute("transform", `rotate(${d.target})`);
       target.dataset.degrees = String(d.target);
     }
-    const set = (cls, text) => { card.querySelector(`dd.${cls}`).textContent = text; };
-    set("temperature", fixed(d.temperature_c, 0, " °C"));
-    set("voltage", fixed(d.volts, 1, " V"));
-    set("current", fixed(d.amps, 2, " A"));
-    set("speed", fixed(d.speed_percent, 0, " %"));
-    set("direction", d.direction || dash);
-    set("target", fixed(d.target, 1, "°"));
+    for (const dd of card.querySelectorAll("dd.telemetry")) {
+      const [subject, name] = dd.dataset.key.split(".");
+      dd.textContent = reading(telemetryValue(d, dd.dataset.key), protocol.telemetry[subject][name]);
+    }
+    card.querySelector("dd.target").textContent = fixed(d.target, 1, "°");
     const errors = d.errors || [];
     card.querySelector(".error-list").replaceChildren(...errors.map((e) => el("li", {}, e)));
     const clear = card.querySelector(".clear-errors");
@@ -243,15 +279,29 @@
     return f;
   }
 
+  // A number input with the range, step and unit of a command's field.
+  function fieldInput(command, name, cls, value, title) {
+    const field = (protocol.commands[command] || {})[name] || {};
+    return number({ class: `cmd ${cls}`, min: field.min ?? 0, max: field.max ?? 0,
+                    step: field.step ?? 1, value, title });
+  }
+
+  // A select of a command field's words, `preferred` chosen when it is one of them.
+  function wordOptions(command, name, cls, preferred) {
+    const words = ((protocol.commands[command] || {})[name] || {}).words || [];
+    const select = options(cls, words);
+    if (words.includes(preferred)) select.value = preferred;
+    return select;
+  }
+
   function buildCommands(serial) {
     const value = (f, cls) => f.querySelector(`.${cls}`).value;
     const move = form("move", (f) => send({
       command: "move", serial, degrees: Number(value(f, "move-degrees")),
       speed_percent: Number(value(f, "move-speed")), direction: value(f, "move-direction") }, serial),
-      "move", number({ class: "cmd move-degrees", min: 0, max: 359.9, step: 0.1, value: 0,
-                          title: "degrees" }), "°",
-      number({ class: "cmd move-speed", min: 0, max: 100, value: 100, title: "speed %" }), "%",
-      options("move-direction", ["shortest", "open", "close"]),
+      "move", fieldInput("move", "degrees", "move-degrees", 0, "degrees"), "°",
+      fieldInput("move", "speed_percent", "move-speed", 100, "speed %"), "%",
+      wordOptions("move", "direction", "move-direction", "shortest"),
       el("button", { class: "cmd move-send", type: "submit" }, "Move"));
     const stop = el("button", { class: "cmd stop", type: "button" }, "Stop");
     stop.addEventListener("click", () => send({ command: "stop", serial }, serial));
@@ -260,17 +310,15 @@
     const jog = form("jog", (f) => send({
       command: "jog", serial, milliseconds: Number(value(f, "jog-ms")),
       speed_percent: Number(value(f, "jog-speed")), direction: value(f, "jog-direction") }, serial),
-      "jog", number({ class: "cmd jog-ms", min: 0, max: 65535, value: 200, title: "ms" }), "ms at",
-      number({ class: "cmd jog-speed", min: 0, max: 100, value: 50, title: "speed %" }), "%",
-      options("jog-direction", ["open", "close"]),
+      "jog", fieldInput("jog", "milliseconds", "jog-ms", 200, "ms"), "ms at",
+      fieldInput("jog", "speed_percent", "jog-speed", 50, "speed %"), "%",
+      wordOptions("jog", "direction", "jog-direction", "open"),
       el("button", { class: "cmd jog-send", type: "submit" }, "Jog"));
     const request = form("request", (f) => {
       const telemetry = value(f, "request-telemetry");
       send({ command: "request", serial, telemetry,
              resend_tenths: 0 }, serial);
-    }, "request", options("request-telemetry", ["current", "speed", "position", "temperature",
-                                                "voltage", "dps", "run-time", "cycle-counts",
-                                                "version"]),
+    }, "request", options("request-telemetry", (protocol.commands.request || {}).telemetry || []),
       el("button", { class: "cmd request-send", type: "submit" }, "Request"));
     return el("div", { class: "commands cmd" }, move, el("div", {}, stop, " ", clear), jog, request);
   }
@@ -360,6 +408,18 @@
     requestAnimationFrame(paint);
   }
 
+  // The plot's fields: every number the valves report, position first.
+  function buildPlotFields() {
+    const select = $("plot-field");
+    const chosen = select.value || "position.degrees";
+    const fields = numericFields();
+    const perSubject = (subject) => fields.filter((f) => f.subject === subject).length;
+    select.replaceChildren(...fields.map((f) => el("option", { value: f.key },
+      `${label(f.subject, f.name, perSubject(f.subject))}${f.field.unit ? ` (${f.field.unit})` : ""}`)));
+    select.value = fields.some((f) => f.key === chosen) ? chosen : (fields[0] || {}).key || "";
+    requestPaint();
+  }
+
   function paint() {
     framePending = false;
     if (!plotDirty) return;
@@ -372,10 +432,11 @@
       if (valve.history.length) nowMs = Math.max(nowMs, valve.history[valve.history.length - 1][0]);
       if (!valve.card.querySelector(".plot-pick").checked) continue;
       series.push({ label: serial, color: valve.color,
-                    points: valve.history.map(([t, d]) => [t, d[field] ?? null]) });
+                    points: valve.history.map(([t, d]) => [t, telemetryValue(d, field)]) });
     }
     if (serverOffsetMs !== null) nowMs = Math.max(nowMs, Date.now() + serverOffsetMs);
-    plot.draw(series, nowMs || Date.now(), windowS, UNITS[field]);
+    const chosen = $("plot-field").selectedOptions[0];
+    plot.draw(series, nowMs || Date.now(), windowS, chosen ? chosen.textContent : "");
     stats.frames_painted += 1;
   }
 

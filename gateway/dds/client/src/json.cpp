@@ -1,6 +1,5 @@
 #include "teejet/client/json.hpp"
 
-#include <cmath>
 #include <string>
 
 #include "teejet/codec/codec.hpp"
@@ -8,15 +7,37 @@
 
 namespace teejet::client {
 
-double at_resolution(float value, int steps_per_unit) {
-  // Dividing by the whole number of steps, not multiplying by the inexact 0.1, is what lands on
-  // the double nearest to the decimal.
-  return std::round(static_cast<double>(value) * steps_per_unit) / steps_per_unit;
+nlohmann::json to_json(const codec::FieldValue& value) {
+  return std::visit([](const auto& v) { return nlohmann::json(v); }, value);
+}
+
+std::optional<codec::FieldValue> field_value_of(const nlohmann::json& value) {
+  if (value.is_number_unsigned()) {
+    const auto number = value.get<std::uint64_t>();
+    if (number > static_cast<std::uint64_t>(INT64_MAX)) return static_cast<double>(number);
+    return static_cast<std::int64_t>(number);
+  }
+  if (value.is_number_integer()) return value.get<std::int64_t>();
+  if (value.is_number_float()) return value.get<double>();
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>();
+  return std::nullopt;
+}
+
+nlohmann::json fields_json(const codec::FromValveMessage& message) {
+  nlohmann::json fields = nlohmann::json::object();
+  codec::for_each_field(message, [&](std::string_view name, const codec::FieldValue& value) {
+    fields[std::string(name)] = to_json(value);
+  });
+  return fields;
 }
 
 nlohmann::json to_json(const ValveRow& row) {
   nlohmann::json errors = nlohmann::json::array();
   for (const ErrorKind kind : row.errors) errors.push_back(std::string(dds::to_string(kind)));
+  nlohmann::json telemetry = nlohmann::json::object();
+  for (const auto& [subject, reply] : row.telemetry)
+    telemetry[subject] = fields_json(reply.message);
   const auto optional = [](const auto& value) -> nlohmann::json {
     if (!value) return nullptr;
     return *value;
@@ -26,11 +47,12 @@ nlohmann::json to_json(const ValveRow& row) {
       {"address", row.address},
       {"online", row.online},
       {"boot_mode", row.boot_mode},
-      {"position", optional(row.position_degrees)},
-      {"temperature_c", optional(row.temperature_c)},
-      {"volts", optional(row.volts)},
+      {"position", optional(row.position_degrees())},
+      {"temperature_c", optional(row.temperature_c())},
+      {"volts", optional(row.volts())},
       {"errors", errors},
       {"gateway", row.gateway},
+      {"telemetry", telemetry},
   };
 }
 

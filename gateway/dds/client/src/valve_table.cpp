@@ -2,33 +2,40 @@
 
 #include <algorithm>
 
-#include "teejet/client/names.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::client {
+namespace {
 
-std::string reply_name(Telemetry telemetry) {
-  switch (telemetry) {
-    case TELEMETRY_VERSION:
-      return "version";
-    case TELEMETRY_POSITION:
-      return "position";
-    case TELEMETRY_TEMPERATURE:
-      return "temperature";
-    case TELEMETRY_VOLTAGE:
-      return "voltage";
-    case TELEMETRY_CURRENT:
-      return "current";
-    case TELEMETRY_DEGREES_PER_SECOND:
-      return "degrees_per_second";
-    case TELEMETRY_SPEED_DIRECTION:
-      return "speed_direction";
-    case TELEMETRY_RUN_TIME:
-      return "run_time";
-    case TELEMETRY_CYCLE_COUNTS:
-      return "cycle_count";
+std::optional<double> number_in(const Reply* reply, std::string_view field) {
+  if (reply == nullptr) return std::nullopt;
+  const auto value = codec::field_value(reply->message, field);
+  if (!value) return std::nullopt;
+  if (const auto* real = std::get_if<double>(&*value)) return *real;
+  if (const auto* integer = std::get_if<std::int64_t>(&*value)) {
+    return static_cast<double>(*integer);
   }
-  return "unknown";
+  return std::nullopt;
 }
+
+}  // namespace
+
+const Reply* ValveRow::reply(std::string_view subject) const {
+  const auto it = telemetry.find(subject);
+  return it == telemetry.end() ? nullptr : &it->second;
+}
+
+std::optional<double> ValveRow::position_degrees() const {
+  return number_in(reply("position"), "degrees");
+}
+
+std::optional<int> ValveRow::temperature_c() const {
+  const auto celsius = number_in(reply("temperature"), "valve_c");
+  if (!celsius) return std::nullopt;
+  return static_cast<int>(*celsius);
+}
+
+std::optional<double> ValveRow::volts() const { return number_in(reply("voltage"), "volts"); }
 
 ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
   Entry& found = rows_[serial];
@@ -45,20 +52,11 @@ void ValveTable::on_presence(const ValvePresence& presence) {
   found.row.gateway = presence.gateway().to_string();
 }
 
-void ValveTable::on_position(std::uint32_t serial, double degrees, std::uint64_t received_ns) {
-  entry(serial).row.position_degrees = degrees;
-  on_reply(serial, "position", {received_ns, {{"degrees", degrees}}});
-}
-
-void ValveTable::on_temperature(std::uint32_t serial, int valve_c, int sensor_c,
-                                std::uint64_t received_ns) {
-  entry(serial).row.temperature_c = valve_c;
-  on_reply(serial, "temperature", {received_ns, {{"valve_c", valve_c}, {"sensor_c", sensor_c}}});
-}
-
-void ValveTable::on_voltage(std::uint32_t serial, double volts, std::uint64_t received_ns) {
-  entry(serial).row.volts = volts;
-  on_reply(serial, "voltage", {received_ns, {{"volts", volts}}});
+void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
+                              std::uint64_t received_ns) {
+  const auto subject = codec::subject(message);
+  if (subject.empty()) return;  // not a reply: errors and I'm Here have their own ways
+  entry(serial).row.telemetry.insert_or_assign(std::string(subject), Reply{received_ns, message});
 }
 
 void ValveTable::on_error(std::uint32_t serial, ErrorKind kind) {
@@ -84,10 +82,6 @@ void ValveTable::on_gateway_status(const GatewayStatus& status) {
   summary.rx_dropped = status.rx_dropped();
 }
 
-void ValveTable::on_reply(std::uint32_t serial, const std::string& name, Reply reply) {
-  replies_[{serial, name}] = std::move(reply);
-}
-
 std::vector<ValveRow> ValveTable::rows() const {
   std::vector<ValveRow> out;
   for (const auto& [serial, found] : rows_) {
@@ -108,10 +102,12 @@ std::vector<GatewaySummary> ValveTable::gateways() const {
   return out;
 }
 
-std::optional<Reply> ValveTable::reply(std::uint32_t serial, const std::string& name) const {
-  const auto it = replies_.find({serial, name});
-  if (it == replies_.end()) return std::nullopt;
-  return it->second;
+std::optional<Reply> ValveTable::reply(std::uint32_t serial, std::string_view subject) const {
+  const auto it = rows_.find(serial);
+  if (it == rows_.end()) return std::nullopt;
+  const Reply* found = it->second.row.reply(subject);
+  if (found == nullptr) return std::nullopt;
+  return *found;
 }
 
 std::size_t ValveTable::online_count() const {
@@ -137,7 +133,7 @@ bool ValveTable::telemetry_complete() const {
   return std::all_of(rows_.begin(), rows_.end(), [](const auto& item) {
     const ValveRow& row = item.second.row;
     return !item.second.present || !row.online ||
-           (row.position_degrees && row.temperature_c && row.volts);
+           (row.position_degrees() && row.temperature_c() && row.volts());
   });
 }
 

@@ -4,9 +4,7 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <vector>
 
-#include "teejet/client/names.hpp"
-#include "teejet/client/json.hpp"
-#include "teejet/codec/codec.hpp"
+#include "teejet/dds/conversions.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
@@ -16,20 +14,7 @@ using eprosima::fastdds::dds::DataReader;
 using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
-namespace {
-
-std::string version_text(const SoftwareVersion& version) {
-  return codec::format_version(
-      codec::SoftwareVersion{version.major(), version.minor(), version.test()});
-}
-
-std::string rotation_text(Rotation rotation) {
-  return rotation == ROTATION_CLOCKWISE ? "clockwise" : "counterclockwise";
-}
-
-}  // namespace
-
-ValveView::Reader ValveView::reader_of(const char* topic_name,
+ValveView::Reader ValveView::reader_of(const std::string& topic_name,
                                        Result<eprosima::fastdds::dds::Topic*> topic) {
   if (failure_) return nullptr;
   if (!topic) {
@@ -47,9 +32,8 @@ ValveView::Reader ValveView::reader_of(const char* topic_name,
 
 template <class Sample>
 ValveView::Reader ValveView::subscribe(std::function<void(const Sample&)> on_sample) {
-  using Topic = dds::topics::TopicOf<Sample>;
   Reader reader =
-      reader_of(Topic::kName, participant_.topic<typename Topic::PubSubType>(Topic::kName));
+      reader_of(dds::topics::topic_name<Sample>(), dds::topics::topic_of<Sample>(participant_));
   if (reader == nullptr) return nullptr;
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
@@ -84,58 +68,27 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
   subscribe<ValvePresence>([this](const ValvePresence& sample) { table_.on_presence(sample); });
   gateway_status_reader_ = subscribe<GatewayStatus>(
       [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
-  subscribe<ValvePosition>([this](const ValvePosition& sample) {
-    table_.on_position(sample.serial(), at_resolution(sample.degrees(), 10), sample.received_ns());
-  });
-  subscribe<ValveTemperature>([this](const ValveTemperature& sample) {
-    table_.on_temperature(sample.serial(), sample.valve_c(), sample.sensor_c(),
-                          sample.received_ns());
-  });
-  subscribe<ValveVoltage>([this](const ValveVoltage& sample) {
-    table_.on_voltage(sample.serial(), at_resolution(sample.volts(), 10), sample.received_ns());
-  });
-  subscribe<ValveVersion>([this](const ValveVersion& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_VERSION),
-                    {sample.received_ns(),
-                     {{"application", version_text(sample.application())},
-                      {"bootloader", version_text(sample.bootloader())}}});
-  });
-  subscribe<ValveCurrent>([this](const ValveCurrent& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_CURRENT),
-                    {sample.received_ns(),
-                     {{"amps", at_resolution(sample.amps(), 100)},
-                      {"last_running_amps", at_resolution(sample.last_running_amps(), 100)}}});
-  });
-  subscribe<ValveDegreesPerSecond>([this](const ValveDegreesPerSecond& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_DEGREES_PER_SECOND),
-                    {sample.received_ns(),
-                     {{"dps", sample.dps()}, {"direction", to_string(sample.direction())}}});
-  });
-  subscribe<ValveSpeedDirection>([this](const ValveSpeedDirection& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_SPEED_DIRECTION),
-                    {sample.received_ns(),
-                     {{"speed_percent", sample.speed_percent()},
-                      {"direction", to_string(sample.direction())},
-                      {"opening_direction", rotation_text(sample.opening_direction())}}});
-  });
-  subscribe<ValveRunTime>([this](const ValveRunTime& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_RUN_TIME),
-                    {sample.received_ns(), {{"seconds", sample.seconds()}}});
-  });
-  subscribe<ValveCycleCount>([this](const ValveCycleCount& sample) {
-    table_.on_reply(sample.serial(), reply_name(TELEMETRY_CYCLE_COUNTS),
-                    {sample.received_ns(), {{"count", sample.count()}}});
-  });
-  subscribe<ValveBaudRate>([this](const ValveBaudRate& sample) {
-    table_.on_reply(sample.serial(), kBaudRateReply,
-                    {sample.received_ns(), {{"bit_rate", sample.bit_rate()}}});
-  });
+  subscribe_telemetry(std::type_identity<dds::TelemetrySample>{});
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
   if (Reader errors = reader_of(dds::topics::kError,
                                 participant_.topic<ValveErrorPubSubType>(dds::topics::kError))) {
     handlers_.emplace(errors, [this](Reader from) { take_errors(from); });
   }
+}
+
+template <class... Samples>
+void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>) {
+  // Every telemetry topic alike, as the codec's messages; errors are instances of their own.
+  const auto one = [this](auto identity) {
+    using Sample = typename decltype(identity)::type;
+    if constexpr (!std::is_same_v<Sample, ValveError>) {
+      subscribe<Sample>([this](const Sample& sample) {
+        table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
+      });
+    }
+  };
+  (one(std::type_identity<Samples>{}), ...);
 }
 
 ValveView::~ValveView() {

@@ -1,8 +1,10 @@
 #include "teejet/dds/conversions.hpp"
 
+#include <array>
+#include <cmath>
 #include <string>
 
-#include "teejet/dds/names.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::dds {
 namespace {
@@ -15,8 +17,117 @@ struct Overloaded : Fs... {
 template <class... Fs>
 Overloaded(Fs...) -> Overloaded<Fs...>;
 
+// ---- The rows: the IDL's enumerations against the codec's messages ---------------------------
+
+// What each Telemetry value of the IDL asks for. The reply, the sample, the topic and every name
+// follow from the request and the codec's table.
+const std::array<std::pair<Telemetry, codec::ToValveMessage>, 9> kTelemetryRequests{{
+    {TELEMETRY_VERSION, codec::RequestVersion{}},
+    {TELEMETRY_POSITION, codec::RequestPosition{}},
+    {TELEMETRY_TEMPERATURE, codec::RequestTemperature{}},
+    {TELEMETRY_VOLTAGE, codec::RequestVoltage{}},
+    {TELEMETRY_CURRENT, codec::RequestCurrent{}},
+    {TELEMETRY_DEGREES_PER_SECOND, codec::RequestDegreesPerSecond{}},
+    {TELEMETRY_SPEED_DIRECTION, codec::RequestSpeedDirection{}},
+    {TELEMETRY_RUN_TIME, codec::RequestRunTime{}},
+    {TELEMETRY_CYCLE_COUNTS, codec::RequestCycleCounts{}},
+}};
+
+// What each ErrorKind of the IDL is on the wire. A ValveError carries the error message's first
+// field as its value, the second as its limit, and its direction if it has one.
+const std::array<std::pair<ErrorKind, codec::FromValveMessage>, 6> kErrorMessages{{
+    {ERROR_HIGH_VOLTAGE, codec::HighVoltageError{}},
+    {ERROR_LOW_VOLTAGE, codec::LowVoltageError{}},
+    {ERROR_HIGH_CURRENT, codec::HighCurrentError{}},
+    {ERROR_LOW_CURRENT, codec::LowCurrentError{}},
+    {ERROR_HIGH_TEMPERATURE, codec::HighTemperatureError{}},
+    {ERROR_MIN_DEGREES_PER_SECOND, codec::MinDegreesPerSecondError{}},
+}};
+
+// The message each CommandKind but COMMAND_REQUEST sends (a request's is its telemetry's). A
+// command fills the message's fields of the same name; a baud-rate request sends the one rate
+// code the decoder accepts, whatever the command's bit_rate says.
+struct CommandRow {
+  CommandKind kind;
+  codec::ToValveMessage message;
+  bool takes_fields = true;
+};
+const std::array<CommandRow, 8> kCommands{{
+    {COMMAND_STOP, codec::Stop{}},
+    {COMMAND_MANUAL, codec::Manual{}},
+    {COMMAND_TARGET_DEGREES, codec::TargetDegrees{}},
+    {COMMAND_DEGREES_FROM_POSITION, codec::DegreesFromPosition{}},
+    {COMMAND_CLEAR_ERRORS, codec::ClearErrors{}},
+    {COMMAND_MILLISECONDS_TO_RUN, codec::MillisecondsToRun{}},
+    {COMMAND_SET_BAUD_RATE, codec::BaudRate{codec::BaudAction::kSet, codec::kBitRate250k}},
+    {COMMAND_REQUEST_BAUD_RATE, codec::BaudRate{codec::BaudAction::kRequest, codec::kBitRate250k},
+     false},
+}};
+
+// ---- ValveCommand's fields by the codec's names ------------------------------------------------
+
+// The command's value for a message field of the same name; nullopt for a field the IDL's
+// command does not carry (the baud-rate marker).
+std::optional<codec::FieldValue> command_field(const ValveCommand& command, std::string_view name) {
+  if (name == "speed_percent") return std::int64_t{command.speed_percent()};
+  if (name == "direction") {
+    const auto word = direction_word(command.direction());
+    if (word.empty()) return std::to_string(command.direction());  // refused by the codec
+    return std::string(word);
+  }
+  if (name == "degrees") return static_cast<double>(command.degrees());
+  if (name == "milliseconds") return std::int64_t{command.milliseconds()};
+  if (name == "resend_tenths") return std::int64_t{command.resend_tenths()};
+  if (name == "bit_rate") return std::int64_t{command.bit_rate()};
+  return std::nullopt;
+}
+
+void set_command_field(ValveCommand& command, std::string_view name,
+                       const codec::FieldValue& value) {
+  const auto* integer = std::get_if<std::int64_t>(&value);
+  if (name == "speed_percent" && integer)
+    command.speed_percent(static_cast<std::uint8_t>(*integer));
+  if (name == "milliseconds" && integer) command.milliseconds(static_cast<std::uint16_t>(*integer));
+  if (name == "resend_tenths" && integer)
+    command.resend_tenths(static_cast<std::uint8_t>(*integer));
+  if (name == "bit_rate" && integer) command.bit_rate(static_cast<std::uint32_t>(*integer));
+  if (const auto* real = std::get_if<double>(&value); real && name == "degrees") {
+    command.degrees(static_cast<float>(*real));
+  }
+  if (const auto* word = std::get_if<std::string>(&value); word && name == "direction") {
+    command.direction(direction_of(*word).value_or(DIRECTION_CLOSE));
+  }
+}
+
+// The row of a message: the same id, and the same value in every field a command cannot carry
+// (which tells a baud-rate set from a request).
+const CommandRow* command_row(const codec::ToValveMessage& message) {
+  for (const CommandRow& row : kCommands) {
+    if (codec::message_id(row.message) != codec::message_id(message)) continue;
+    bool same = true;
+    for (const codec::FieldInfo& field : codec::describe(message).fields) {
+      if (!command_field(ValveCommand{}, field.name)) {
+        same = same && codec::field_value(row.message, field.name) ==
+                           codec::field_value(message, field.name);
+      }
+    }
+    if (same) return &row;
+  }
+  return nullptr;
+}
+
+Error undefined(const char* what, int value) {
+  return field_error(ErrorCode::kInvalidValue, what, std::to_string(value) + " is undefined");
+}
+
+// ---- Samples ------------------------------------------------------------------------------
+
 teejet::Direction to_idl(codec::Direction d) {
   return d == codec::Direction::kOpen ? DIRECTION_OPEN : DIRECTION_CLOSE;
+}
+
+codec::Direction to_codec(teejet::Direction d) {
+  return d == DIRECTION_OPEN ? codec::Direction::kOpen : codec::Direction::kClose;
 }
 
 teejet::SoftwareVersion to_idl(const codec::SoftwareVersion& v) {
@@ -27,6 +138,10 @@ teejet::SoftwareVersion to_idl(const codec::SoftwareVersion& v) {
   return out;
 }
 
+codec::SoftwareVersion to_codec(const teejet::SoftwareVersion& v) {
+  return {v.major(), v.minor(), v.test()};
+}
+
 template <class Sample>
 Sample stamped(std::uint32_t serial, Timestamp received) {
   Sample sample;
@@ -35,56 +150,44 @@ Sample stamped(std::uint32_t serial, Timestamp received) {
   return sample;
 }
 
-ValveError error_sample(std::uint32_t serial, Timestamp received, ErrorKind kind, double value,
-                        double limit, teejet::Direction direction = DIRECTION_CLOSE) {
+double number(const std::optional<codec::FieldValue>& value) {
+  if (!value) return 0.0;
+  if (const auto* integer = std::get_if<std::int64_t>(&*value))
+    return static_cast<double>(*integer);
+  if (const auto* real = std::get_if<double>(&*value)) return *real;
+  return 0.0;
+}
+
+std::optional<TelemetrySample> error_sample(std::uint32_t serial,
+                                            const codec::FromValveMessage& message,
+                                            Timestamp received) {
+  const auto kind = error_kind_of(message);
+  if (!kind) return std::nullopt;
+  const auto& fields = codec::describe(message).fields;
   auto sample = stamped<ValveError>(serial, received);
-  sample.kind(kind);
-  sample.value(static_cast<float>(value));
-  sample.limit(static_cast<float>(limit));
-  sample.direction(direction);
+  sample.kind(*kind);
+  sample.value(static_cast<float>(number(codec::field_value(message, fields.at(0).name))));
+  sample.limit(static_cast<float>(number(codec::field_value(message, fields.at(1).name))));
+  const auto direction = codec::field_value(message, "direction");
+  const auto* word = direction ? std::get_if<std::string>(&*direction) : nullptr;
+  sample.direction(word ? direction_of(*word).value_or(DIRECTION_CLOSE) : DIRECTION_CLOSE);
   return sample;
 }
 
-Error invalid(const ValveCommand& command, const std::string& why) {
-  return Error{ErrorCode::kInvalidValue, std::string(to_string(command.kind())) + ": " + why};
-}
-
-Result<codec::Direction> drive_direction(const ValveCommand& command) {
-  switch (command.direction()) {
-    case DIRECTION_OPEN:
-      return codec::Direction::kOpen;
-    case DIRECTION_CLOSE:
-      return codec::Direction::kClose;
-    case DIRECTION_SHORTEST:
-      return invalid(command, "direction SHORTEST exists only for Target Degrees");
+codec::FromValveMessage error_message(const ValveError& sample) {
+  auto message = error_message_of(sample.kind()).value_or(codec::HighVoltageError{});
+  const auto& fields = codec::describe(message).fields;
+  // Each on its field's grid first: an error's whole degrees Celsius arrive as a float.
+  const auto set = [&](const codec::FieldInfo& field, float value) {
+    const double step = field.resolution;
+    (void)codec::set_field(message, field.name, std::round(value / step) * step);
+  };
+  set(fields.at(0), sample.value());
+  set(fields.at(1), sample.limit());
+  if (codec::find_field(codec::describe(message), "direction") != nullptr) {
+    (void)codec::set_field(message, "direction", std::string(direction_word(sample.direction())));
   }
-  return invalid(command, "direction " + std::to_string(command.direction()) + " is undefined");
-}
-
-Result<codec::ToValveMessage> telemetry_request(const ValveCommand& command) {
-  const unsigned resend = command.resend_tenths();
-  switch (command.telemetry()) {
-    case TELEMETRY_VERSION:
-      if (resend != 0) return invalid(command, "version is sent once; resend_tenths must be 0");
-      return codec::ToValveMessage{codec::RequestVersion{}};
-    case TELEMETRY_POSITION:
-      return codec::ToValveMessage{codec::RequestPosition{resend}};
-    case TELEMETRY_TEMPERATURE:
-      return codec::ToValveMessage{codec::RequestTemperature{resend}};
-    case TELEMETRY_VOLTAGE:
-      return codec::ToValveMessage{codec::RequestVoltage{resend}};
-    case TELEMETRY_CURRENT:
-      return codec::ToValveMessage{codec::RequestCurrent{resend}};
-    case TELEMETRY_DEGREES_PER_SECOND:
-      return codec::ToValveMessage{codec::RequestDegreesPerSecond{resend}};
-    case TELEMETRY_SPEED_DIRECTION:
-      return codec::ToValveMessage{codec::RequestSpeedDirection{resend}};
-    case TELEMETRY_RUN_TIME:
-      return codec::ToValveMessage{codec::RequestRunTime{resend}};
-    case TELEMETRY_CYCLE_COUNTS:
-      return codec::ToValveMessage{codec::RequestCycleCounts{resend}};
-  }
-  return invalid(command, "telemetry " + std::to_string(command.telemetry()) + " is undefined");
+  return message;
 }
 
 }  // namespace
@@ -92,206 +195,216 @@ Result<codec::ToValveMessage> telemetry_request(const ValveCommand& command) {
 std::optional<TelemetrySample> to_sample(std::uint32_t serial,
                                          const codec::FromValveMessage& message,
                                          Timestamp received) {
-  return std::visit(
+  return std::visit(Overloaded{
+                        [&](const codec::VersionInfo& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveVersion>(serial, received);
+                          s.application(to_idl(m.application));
+                          s.bootloader(to_idl(m.bootloader));
+                          return s;
+                        },
+                        [&](const codec::Position& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValvePosition>(serial, received);
+                          s.degrees(static_cast<float>(m.degrees));
+                          return s;
+                        },
+                        [&](const codec::Temperature& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveTemperature>(serial, received);
+                          s.valve_c(static_cast<std::int8_t>(m.valve_c));
+                          s.sensor_c(static_cast<std::int8_t>(m.sensor_c));
+                          return s;
+                        },
+                        [&](const codec::Voltage& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveVoltage>(serial, received);
+                          s.volts(static_cast<float>(m.volts));
+                          return s;
+                        },
+                        [&](const codec::RunCurrent& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveCurrent>(serial, received);
+                          s.amps(static_cast<float>(m.amps));
+                          s.last_running_amps(static_cast<float>(m.last_running_amps));
+                          return s;
+                        },
+                        [&](const codec::DegreesPerSecond& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveDegreesPerSecond>(serial, received);
+                          s.dps(static_cast<std::uint16_t>(m.dps));
+                          s.direction(to_idl(m.direction));
+                          return s;
+                        },
+                        [&](const codec::SpeedDirection& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveSpeedDirection>(serial, received);
+                          s.speed_percent(static_cast<std::uint8_t>(m.speed_percent));
+                          s.direction(to_idl(m.direction));
+                          s.opening_direction(m.opening_direction == codec::Rotation::kClockwise
+                                                  ? ROTATION_CLOCKWISE
+                                                  : ROTATION_COUNTERCLOCKWISE);
+                          return s;
+                        },
+                        [&](const codec::RunTime& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveRunTime>(serial, received);
+                          s.seconds(m.seconds);
+                          return s;
+                        },
+                        [&](const codec::CycleCounts& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveCycleCounts>(serial, received);
+                          s.count(m.count);
+                          return s;
+                        },
+                        [&](const codec::BaudRateReply& m) -> std::optional<TelemetrySample> {
+                          auto s = stamped<ValveBaudRate>(serial, received);
+                          s.bit_rate(m.bit_rate);
+                          return s;
+                        },
+                        // The errors, by the rows above; I'm Here feeds the directory, no topic.
+                        [&](const auto& m) -> std::optional<TelemetrySample> {
+                          return error_sample(serial, m, received);
+                        },
+                    },
+                    message);
+}
+
+codec::FromValveMessage from_sample(const TelemetrySample& sample) {
+  const auto message = std::visit(
       Overloaded{
-          [](const codec::IAmHere&) -> std::optional<TelemetrySample> { return std::nullopt; },
-          [&](const codec::VersionInfo& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveVersion>(serial, received);
-            s.application(to_idl(m.application));
-            s.bootloader(to_idl(m.bootloader));
-            return s;
+          [](const ValveVersion& s) -> codec::FromValveMessage {
+            return codec::VersionInfo{to_codec(s.application()), to_codec(s.bootloader())};
           },
-          [&](const codec::Position& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValvePosition>(serial, received);
-            s.degrees(static_cast<float>(m.degrees));
-            return s;
+          [](const ValvePosition& s) -> codec::FromValveMessage {
+            return codec::Position{s.degrees()};
           },
-          [&](const codec::Temperature& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveTemperature>(serial, received);
-            s.valve_c(static_cast<std::int8_t>(m.valve_c));
-            s.sensor_c(static_cast<std::int8_t>(m.sensor_c));
-            return s;
+          [](const ValveTemperature& s) -> codec::FromValveMessage {
+            return codec::Temperature{s.valve_c(), s.sensor_c()};
           },
-          [&](const codec::Voltage& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveVoltage>(serial, received);
-            s.volts(static_cast<float>(m.volts));
-            return s;
+          [](const ValveVoltage& s) -> codec::FromValveMessage {
+            return codec::Voltage{s.volts()};
           },
-          [&](const codec::RunCurrent& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveCurrent>(serial, received);
-            s.amps(static_cast<float>(m.amps));
-            s.last_running_amps(static_cast<float>(m.last_running_amps));
-            return s;
+          [](const ValveCurrent& s) -> codec::FromValveMessage {
+            return codec::RunCurrent{s.amps(), s.last_running_amps()};
           },
-          [&](const codec::DegreesPerSecond& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveDegreesPerSecond>(serial, received);
-            s.dps(static_cast<std::uint16_t>(m.dps));
-            s.direction(to_idl(m.direction));
-            return s;
+          [](const ValveDegreesPerSecond& s) -> codec::FromValveMessage {
+            return codec::DegreesPerSecond{s.dps(), to_codec(s.direction())};
           },
-          [&](const codec::SpeedDirection& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveSpeedDirection>(serial, received);
-            s.speed_percent(static_cast<std::uint8_t>(m.speed_percent));
-            s.direction(to_idl(m.direction));
-            s.opening_direction(m.opening_direction == codec::Rotation::kClockwise
-                                    ? ROTATION_CLOCKWISE
-                                    : ROTATION_COUNTERCLOCKWISE);
-            return s;
+          [](const ValveSpeedDirection& s) -> codec::FromValveMessage {
+            return codec::SpeedDirection{s.speed_percent(), to_codec(s.direction()),
+                                         s.opening_direction() == ROTATION_CLOCKWISE
+                                             ? codec::Rotation::kClockwise
+                                             : codec::Rotation::kCounterclockwise};
           },
-          [&](const codec::RunTime& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveRunTime>(serial, received);
-            s.seconds(m.seconds);
-            return s;
+          [](const ValveRunTime& s) -> codec::FromValveMessage {
+            return codec::RunTime{s.seconds()};
           },
-          [&](const codec::CycleCounts& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveCycleCount>(serial, received);
-            s.count(m.count);
-            return s;
+          [](const ValveCycleCounts& s) -> codec::FromValveMessage {
+            return codec::CycleCounts{s.count()};
           },
-          [&](const codec::BaudRateReply& m) -> std::optional<TelemetrySample> {
-            auto s = stamped<ValveBaudRate>(serial, received);
-            s.bit_rate(m.bit_rate);
-            return s;
+          [](const ValveBaudRate& s) -> codec::FromValveMessage {
+            return codec::BaudRateReply{s.bit_rate()};
           },
-          [&](const codec::HighVoltageError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_HIGH_VOLTAGE, m.volts, m.limit_volts);
-          },
-          [&](const codec::LowVoltageError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_LOW_VOLTAGE, m.volts, m.limit_volts);
-          },
-          [&](const codec::HighCurrentError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_HIGH_CURRENT, m.amps, m.limit_amps);
-          },
-          [&](const codec::LowCurrentError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_LOW_CURRENT, m.amps, m.limit_amps);
-          },
-          [&](const codec::HighTemperatureError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_HIGH_TEMPERATURE, m.temperature_c,
-                                m.limit_c);
-          },
-          [&](const codec::MinDegreesPerSecondError& m) -> std::optional<TelemetrySample> {
-            return error_sample(serial, received, ERROR_MIN_DEGREES_PER_SECOND, m.dps, m.limit_dps,
-                                to_idl(m.direction));
-          },
+          [](const ValveError& s) -> codec::FromValveMessage { return error_message(s); },
       },
-      message);
+      sample);
+  return codec::as_sent(message);
 }
 
 Result<codec::ToValveMessage> to_message(const ValveCommand& command) {
-  const unsigned speed = command.speed_percent();
-  switch (command.kind()) {
-    case COMMAND_STOP:
-      return codec::ToValveMessage{codec::Stop{}};
-    case COMMAND_CLEAR_ERRORS:
-      return codec::ToValveMessage{codec::ClearErrors{}};
-    case COMMAND_MANUAL: {
-      auto direction = drive_direction(command);
-      if (!direction) return direction.error();
-      return codec::ToValveMessage{codec::Manual{speed, *direction}};
+  std::optional<codec::ToValveMessage> message;
+  bool takes_fields = true;
+  if (command.kind() == COMMAND_REQUEST) {
+    message = request_of(command.telemetry());
+    if (!message) {
+      return in_context("request", undefined("telemetry", static_cast<int>(command.telemetry())));
     }
-    case COMMAND_TARGET_DEGREES: {
-      codec::TargetDirection direction{};
-      switch (command.direction()) {
-        case DIRECTION_OPEN:
-          direction = codec::TargetDirection::kOpen;
-          break;
-        case DIRECTION_CLOSE:
-          direction = codec::TargetDirection::kClose;
-          break;
-        case DIRECTION_SHORTEST:
-          direction = codec::TargetDirection::kShortest;
-          break;
-        default:
-          return invalid(command,
-                         "direction " + std::to_string(command.direction()) + " is undefined");
+    const bool resends = codec::find_field(codec::describe(*message), "resend_tenths") != nullptr;
+    if (!resends && command.resend_tenths() != 0) {
+      return in_context(codec::subject(*message),
+                        field_error(ErrorCode::kInvalidValue, "resend_tenths",
+                                    std::to_string(command.resend_tenths()) +
+                                        " is not 0: the valve sends it once"));
+    }
+  } else {
+    for (const CommandRow& row : kCommands) {
+      if (row.kind == command.kind()) {
+        message = row.message;
+        takes_fields = row.takes_fields;
       }
-      return codec::ToValveMessage{codec::TargetDegrees{speed, direction, command.degrees()}};
     }
-    case COMMAND_DEGREES_FROM_POSITION: {
-      auto direction = drive_direction(command);
-      if (!direction) return direction.error();
-      return codec::ToValveMessage{
-          codec::DegreesFromPosition{speed, *direction, command.degrees()}};
+    if (!message) {
+      return Error{ErrorCode::kInvalidValue,
+                   "command kind " + std::to_string(command.kind()) + " is undefined"};
     }
-    case COMMAND_MILLISECONDS_TO_RUN: {
-      auto direction = drive_direction(command);
-      if (!direction) return direction.error();
-      return codec::ToValveMessage{
-          codec::MillisecondsToRun{speed, *direction, command.milliseconds()}};
-    }
-    case COMMAND_REQUEST:
-      return telemetry_request(command);
-    case COMMAND_SET_BAUD_RATE:
-      return codec::ToValveMessage{codec::BaudRate{codec::BaudAction::kSet, command.bit_rate()}};
-    case COMMAND_REQUEST_BAUD_RATE:
-      return codec::ToValveMessage{
-          codec::BaudRate{codec::BaudAction::kRequest, codec::kBitRate250k}};
   }
-  return Error{ErrorCode::kInvalidValue,
-               "command kind " + std::to_string(command.kind()) + " is undefined"};
+  if (!takes_fields) return *message;
+  for (const codec::FieldInfo& field : codec::describe(*message).fields) {
+    const auto value = command_field(command, field.name);
+    if (!value) continue;
+    if (auto set = codec::set_field(*message, field.name, *value); !set) return set.error();
+  }
+  return *message;
 }
 
 ValveCommand to_command(const codec::ToValveMessage& message) {
   ValveCommand command;
-  const auto drive = [&](CommandKind kind, unsigned speed, codec::Direction direction) {
-    command.kind(kind);
-    command.speed_percent(static_cast<std::uint8_t>(speed));
-    command.direction(direction == codec::Direction::kOpen ? DIRECTION_OPEN : DIRECTION_CLOSE);
-  };
-  const auto request = [&](Telemetry telemetry, unsigned resend) {
+  if (const auto telemetry = telemetry_of(message)) {
     command.kind(COMMAND_REQUEST);
-    command.telemetry(telemetry);
-    command.resend_tenths(static_cast<std::uint8_t>(resend));
-  };
-  std::visit(
-      Overloaded{
-          [&](const codec::Stop&) { command.kind(COMMAND_STOP); },
-          [&](const codec::Manual& m) { drive(COMMAND_MANUAL, m.speed_percent, m.direction); },
-          [&](const codec::TargetDegrees& m) {
-            command.kind(COMMAND_TARGET_DEGREES);
-            command.speed_percent(static_cast<std::uint8_t>(m.speed_percent));
-            command.direction(m.direction == codec::TargetDirection::kOpen    ? DIRECTION_OPEN
-                              : m.direction == codec::TargetDirection::kClose ? DIRECTION_CLOSE
-                                                                              : DIRECTION_SHORTEST);
-            command.degrees(static_cast<float>(m.degrees));
-          },
-          [&](const codec::DegreesFromPosition& m) {
-            drive(COMMAND_DEGREES_FROM_POSITION, m.speed_percent, m.direction);
-            command.degrees(static_cast<float>(m.degrees));
-          },
-          [&](const codec::ClearErrors&) { command.kind(COMMAND_CLEAR_ERRORS); },
-          [&](const codec::MillisecondsToRun& m) {
-            drive(COMMAND_MILLISECONDS_TO_RUN, m.speed_percent, m.direction);
-            command.milliseconds(static_cast<std::uint16_t>(m.milliseconds));
-          },
-          [&](const codec::RequestVersion&) { request(TELEMETRY_VERSION, 0); },
-          [&](const codec::RequestPosition& m) { request(TELEMETRY_POSITION, m.resend_tenths); },
-          [&](const codec::RequestTemperature& m) {
-            request(TELEMETRY_TEMPERATURE, m.resend_tenths);
-          },
-          [&](const codec::RequestVoltage& m) { request(TELEMETRY_VOLTAGE, m.resend_tenths); },
-          [&](const codec::RequestCurrent& m) { request(TELEMETRY_CURRENT, m.resend_tenths); },
-          [&](const codec::RequestDegreesPerSecond& m) {
-            request(TELEMETRY_DEGREES_PER_SECOND, m.resend_tenths);
-          },
-          [&](const codec::RequestSpeedDirection& m) {
-            request(TELEMETRY_SPEED_DIRECTION, m.resend_tenths);
-          },
-          [&](const codec::RequestRunTime& m) { request(TELEMETRY_RUN_TIME, m.resend_tenths); },
-          [&](const codec::RequestCycleCounts& m) {
-            request(TELEMETRY_CYCLE_COUNTS, m.resend_tenths);
-          },
-          [&](const codec::BaudRate& m) {
-            if (m.action == codec::BaudAction::kSet) {
-              command.kind(COMMAND_SET_BAUD_RATE);
-              command.bit_rate(m.bit_rate);
-            } else {
-              command.kind(COMMAND_REQUEST_BAUD_RATE);
-            }
-          },
-      },
-      message);
+    command.telemetry(*telemetry);
+  } else if (const CommandRow* row = command_row(message)) {
+    command.kind(row->kind);
+  }
+  for (const codec::FieldInfo& field : codec::describe(message).fields) {
+    if (const auto value = codec::field_value(message, field.name)) {
+      set_command_field(command, field.name, *value);
+    }
+  }
   return command;
+}
+
+std::optional<codec::ToValveMessage> request_of(Telemetry telemetry) {
+  for (const auto& [value, request] : kTelemetryRequests) {
+    if (value == telemetry) return request;
+  }
+  return std::nullopt;
+}
+
+std::optional<Telemetry> telemetry_of(const codec::ToValveMessage& request) {
+  for (const auto& [value, row] : kTelemetryRequests) {
+    if (codec::message_id(row) == codec::message_id(request)) return value;
+  }
+  return std::nullopt;
+}
+
+std::optional<Telemetry> telemetry_of(std::string_view word) {
+  const auto request = codec::telemetry_request(word);
+  return request ? telemetry_of(*request) : std::nullopt;
+}
+
+std::optional<codec::FromValveMessage> error_message_of(ErrorKind kind) {
+  for (const auto& [value, message] : kErrorMessages) {
+    if (value == kind) return message;
+  }
+  return std::nullopt;
+}
+
+std::optional<ErrorKind> error_kind_of(const codec::FromValveMessage& message) {
+  for (const auto& [value, row] : kErrorMessages) {
+    if (codec::message_id(row) == codec::message_id(message)) return value;
+  }
+  return std::nullopt;
+}
+
+// The IDL's Direction values are the wire's, Target Degrees's direction byte included.
+static_assert(DIRECTION_CLOSE == static_cast<int>(codec::TargetDirection::kClose) &&
+              DIRECTION_OPEN == static_cast<int>(codec::TargetDirection::kOpen) &&
+              DIRECTION_SHORTEST == static_cast<int>(codec::TargetDirection::kShortest));
+
+std::string_view direction_word(Direction direction) {
+  if (direction < 0 || direction > 0xFF) return {};
+  const auto word = codec::to_string(static_cast<codec::TargetDirection>(direction));
+  return word == "invalid" ? std::string_view{} : word;
+}
+
+std::optional<Direction> direction_of(std::string_view word) {
+  for (const Direction direction : {DIRECTION_CLOSE, DIRECTION_OPEN, DIRECTION_SHORTEST}) {
+    if (direction_word(direction) == word) return direction;
+  }
+  return std::nullopt;
 }
 
 }  // namespace teejet::dds

@@ -1,5 +1,8 @@
 #include "teejet/dds/names.hpp"
 
+#include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
+
 namespace teejet::dds {
 
 std::string_view to_string(CommandKind kind) {
@@ -43,33 +46,18 @@ std::string_view to_string(CommandState state) {
 }
 
 std::string_view to_string(Direction direction) {
-  switch (direction) {
-    case DIRECTION_OPEN:
-      return "open";
-    case DIRECTION_CLOSE:
-      return "close";
-    case DIRECTION_SHORTEST:
-      return "shortest";
-  }
-  return "unknown";
+  const auto word = direction_word(direction);
+  return word.empty() ? "unknown" : word;
 }
 
 std::string_view to_string(ErrorKind kind) {
-  switch (kind) {
-    case ERROR_HIGH_VOLTAGE:
-      return "high_voltage";
-    case ERROR_LOW_VOLTAGE:
-      return "low_voltage";
-    case ERROR_HIGH_CURRENT:
-      return "high_current";
-    case ERROR_LOW_CURRENT:
-      return "low_current";
-    case ERROR_HIGH_TEMPERATURE:
-      return "high_temperature";
-    case ERROR_MIN_DEGREES_PER_SECOND:
-      return "min_degrees_per_second";
-  }
-  return "unknown";
+  const auto message = error_message_of(kind);
+  return message ? codec::error_kind(*message) : "unknown";
+}
+
+std::string_view to_string(Telemetry telemetry) {
+  const auto request = request_of(telemetry);
+  return request ? codec::subject(*request) : "unknown";
 }
 
 std::string_view to_string(BusState state) {

@@ -34,8 +34,7 @@ BusFrame to_bus_frame(const codec::CanFrame& frame, can::FrameDirection directio
 Result<std::unique_ptr<FramePublisher>> FramePublisher::create(Participant& participant,
                                                                std::string gateway,
                                                                std::string can_interface) {
-  using Topic = topics::TopicOf<BusFrame>;
-  auto topic = participant.topic<Topic::PubSubType>(Topic::kName);
+  auto topic = topics::topic_of<BusFrame>(participant);
   if (!topic) return topic.error();
   auto writer = participant.writer(*topic, topics::frame_writer_qos());
   if (!writer) return writer.error();

@@ -64,6 +64,12 @@ const std::vector<MessageInfo>& message_table(Flow flow);
 
 const MessageInfo& describe(const ToValveMessage& message);
 const MessageInfo& describe(const FromValveMessage& message);
+// The message of an id, every field zero; nullopt for an id the sheet does not define.
+std::optional<ToValveMessage> to_valve_message(std::uint8_t id);
+std::optional<FromValveMessage> from_valve_message(std::uint8_t id);
+// The reply that answers a request (fields zero); nullopt for run commands.
+std::optional<FromValveMessage> reply_to(const ToValveMessage& request);
+
 // nullptr when the message has no field of that name.
 const FieldInfo* find_field(const MessageInfo& message, std::string_view name);
 
@@ -101,6 +107,12 @@ Status set_field(FromValveMessage& message, std::string_view field, const FieldV
 // A field's value as for_each_field() presents it; nullopt when there is no such field.
 std::optional<FieldValue> field_value(const ToValveMessage& message, std::string_view field);
 std::optional<FieldValue> field_value(const FromValveMessage& message, std::string_view field);
+
+// The message as the wire carries it: every scaled value on its field's grid (the 74.59999847
+// of a float is the 74.6 the valve sent), so that it prints as the valve sent it; unchanged when
+// a value is outside its range.
+FromValveMessage as_sent(const FromValveMessage& message);
+ToValveMessage as_sent(const ToValveMessage& message);
 
 // ---- Valve mechanics ------------------------------------------------------------------------
 

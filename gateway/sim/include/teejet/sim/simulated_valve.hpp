@@ -4,10 +4,11 @@
 // passed in; motion is computed in closed form from the start of the running command, so the
 // position at any instant is exact whatever the call pattern. See docs/valve-sim.md.
 
-#include <array>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "teejet/codec/messages.hpp"
@@ -70,12 +71,14 @@ class SimulatedValve {
   double run_time_seconds(SteadyTime now) const;             // not rounded
   std::uint32_t cycle_count() const { return cycle_count_; }
   std::uint32_t bit_rate() const { return bit_rate_; }
-  bool error_latched(ErrorKind kind) const;
-  // Resend period of request 0x11..0x18; nullopt when not resending.
+  bool error_latched(std::string_view kind) const;  // codec::error_kinds()'s words
+  // Resend period of a request with automatic resend; nullopt when not resending.
   std::optional<Duration> resend_period(std::uint8_t request_id) const;
 
-  // The telemetry message a request 0x11..0x18 is answered with, as at `now`.
-  codec::FromValveMessage telemetry(std::uint8_t request_id, SteadyTime now) const;
+  // The message a request is answered with, as at `now`: the reply the codec's table names for
+  // it, with this valve's values; nullopt for a message nothing answers.
+  std::optional<codec::FromValveMessage> reply_to(const codec::ToValveMessage& request,
+                                                  SteadyTime now) const;
 
  private:
   // A run command in progress. The valve turns from start_position at `rate` degrees per second
@@ -92,6 +95,7 @@ class SimulatedValve {
     unsigned speed_percent = 0;
   };
   struct Periodic {
+    codec::ToValveMessage request;
     Duration period{};
     SteadyTime next{};
   };
@@ -99,9 +103,6 @@ class SimulatedValve {
     InjectedError error;
     SteadyTime next{};
   };
-
-  static constexpr std::uint8_t kFirstTelemetryRequest = 0x11;
-  static constexpr std::size_t kTelemetryRequests = 8;
 
   double travelled(const Motion& motion, SteadyTime now) const;
   static Duration driven(const Motion& motion, SteadyTime now);
@@ -121,8 +122,21 @@ class SimulatedValve {
   void run_degrees(const codec::DegreesFromPosition& command, SteadyTime now);
   void run_manual(const codec::Manual& command, SteadyTime now);
   void run_milliseconds(const codec::MillisecondsToRun& command, SteadyTime now);
-  void request(std::uint8_t request_id, unsigned resend_tenths, SteadyTime now,
+  // Set or Request CAN Baud Rate: a set changes the rate the valve reports (and keeps).
+  void set_bit_rate(const codec::BaudRate& message);
+  void request(const codec::ToValveMessage& request, SteadyTime now,
                std::vector<codec::FromValveMessage>& replies);
+  // This valve's values in a reply, as at `now`; one per reply the simulator models.
+  void report(codec::VersionInfo& reply, SteadyTime now) const;
+  void report(codec::Position& reply, SteadyTime now) const;
+  void report(codec::Temperature& reply, SteadyTime now) const;
+  void report(codec::Voltage& reply, SteadyTime now) const;
+  void report(codec::RunCurrent& reply, SteadyTime now) const;
+  void report(codec::DegreesPerSecond& reply, SteadyTime now) const;
+  void report(codec::SpeedDirection& reply, SteadyTime now) const;
+  void report(codec::RunTime& reply, SteadyTime now) const;
+  void report(codec::CycleCounts& reply, SteadyTime now) const;
+  void report(codec::BaudRateReply& reply, SteadyTime now) const;
 
   ValveConfig config_;
   double position_ = 0.0;  // while stopped; normalized
@@ -133,8 +147,8 @@ class SimulatedValve {
   bool ran_at_full_speed_ = false;  // last running amps is 0 until then
   std::uint32_t bit_rate_ = codec::kBitRate250k;
   std::optional<SteadyTime> next_i_am_here_;
-  std::array<std::optional<Periodic>, kTelemetryRequests> resends_{};
-  std::array<std::optional<Latched>, kErrorKindCount> errors_{};
+  std::map<std::uint8_t, Periodic> resends_;  // by request id
+  std::map<std::uint8_t, Latched> errors_;    // by message id
   bool powered_ = true;
   bool boot_mode_ = false;
 };

@@ -9,15 +9,13 @@
 #include <string_view>
 
 #include "teejet/can/bus.hpp"
-#include "teejet/codec/messages.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/core/result.hpp"
 
 namespace teejet::sim {
 
-// Opened Degrees of a full-turn ("360-degree") valve; a limited valve must open at most
-// kMaxLimitedOpenedDegrees (the sheet: "340 degrees or less").
-inline constexpr double kFullTurnDegrees = 360.0;
-inline constexpr double kMaxLimitedOpenedDegrees = 340.0;
+// Opened Degrees of a full-turn ("360-degree") valve, which is also its circle.
+inline constexpr double kFullTurnDegrees = codec::kFullTurnOpenedDegrees;
 inline constexpr std::uint32_t kMaxSerial = 0xFFFFFF;
 
 struct ValveConfig {
@@ -47,38 +45,18 @@ Status validate(const ValveConfig& config);
 
 // ---- Error injection --------------------------------------------------------------------------
 
-// The six error messages of the sheet (0x10..0x15).
-enum class ErrorKind : std::uint8_t {
-  kHighVoltage,
-  kLowVoltage,
-  kHighCurrent,
-  kLowCurrent,
-  kHighTemperature,
-  kMinDegreesPerSecond,
-};
-inline constexpr int kErrorKindCount = 6;
+// An error a valve reports until Clear Errors: one of the codec's error messages
+// (codec::error_kinds()) with its values, volts, amps, degrees Celsius or degrees per second.
+using InjectedError = codec::FromValveMessage;
 
-// "high-voltage", "low-voltage", "high-current", "low-current", "high-temperature", "min-dps".
-std::string_view to_string(ErrorKind kind);
-// Accepts the names above; '_' may stand for '-'.
-std::optional<ErrorKind> parse_error_kind(std::string_view text);
+// The error of `kind` (codec::error_message's words: high_voltage, ..., min_degrees_per_second;
+// also high-voltage and min-dps) with its measured value, its limit and, for the kinds that have
+// one, its direction ("open" or "close"); every value checked by the codec.
+Result<InjectedError> make_error(std::string_view kind, double value, double limit,
+                                 std::optional<std::string_view> direction = std::nullopt);
 
-// An error a valve reports until Clear Errors. Units are those of the message: volts, amps,
-// degrees Celsius (whole) or degrees per second (whole).
-struct InjectedError {
-  ErrorKind kind = ErrorKind::kHighVoltage;
-  double value = 0.0;
-  double limit = 0.0;
-  codec::Direction direction = codec::Direction::kOpen;  // Minimum Degrees Per Second only
-
-  friend bool operator==(const InjectedError&, const InjectedError&) = default;
-};
-
-// The message the valve sends for the error.
-codec::FromValveMessage error_message(const InjectedError& error);
-
-// OK, or why the values do not fit the message (ranges of the codec; temperatures and degrees
-// per second must be whole numbers).
+// OK, or why `error` cannot be latched: it is not an error message, or the codec refuses one of
+// its values.
 Status validate(const InjectedError& error);
 
 struct SerialError {
@@ -91,9 +69,6 @@ struct SerialError {
 // Parses the --inject-error syntax SERIAL:KIND:VALUE:LIMIT[:DIRECTION], e.g.
 // "TJV000001:high-voltage:16.2:15.5" or "123456:min-dps:20:30:close". The values are checked.
 Result<SerialError> parse_error_spec(std::string_view text);
-
-// "1.02e" -> {1, 2, 'e'}, "1.02" -> {1, 2, 0}: the inverse of codec::format_version.
-Result<codec::SoftwareVersion> parse_version(std::string_view text);
 
 // "clockwise" / "counterclockwise" (also "cw" / "ccw").
 std::optional<codec::Rotation> parse_rotation(std::string_view text);

@@ -7,6 +7,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <initializer_list>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -30,6 +31,8 @@ class Reader {
   // A mapping whose keys are all in `allowed`, each at most once.
   void expect_keys(const YAML::Node& map, std::string_view section,
                    std::initializer_list<std::string_view> allowed) const;
+  void expect_keys(const YAML::Node& map, std::string_view section,
+                   std::span<const std::string_view> allowed) const;
   // A mapping with any keys, each at most once.
   void expect_mapping(const YAML::Node& map, std::string_view section) const;
   // A sequence; "expected a list of <of_what>" otherwise.

@@ -1,28 +1,28 @@
 #pragma once
 
-// The one place a client checks a command before it goes to DDS: the codec encodes it exactly as
-// the gateway will, so every value the gateway would refuse is refused here first. valvectl's
+// The one place a client builds and checks a command before it goes to DDS: the codec sets each
+// field and encodes the message exactly as the gateway will, so every value the gateway would
+// refuse is refused here first, naming the field (Error::field and Error::complaint). valvectl's
 // command line and teejet-web's page both go through it.
 
-#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
 
-#include "teejet/codec/messages.hpp"
+#include "teejet/codec/codec.hpp"
 #include "teejet/core/result.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::client {
 
-// The command that carries `message` (serial, command_id and origin left for the sender), or an
-// Error whose reason starts with the offending field as the codec names it ("speed_percent 101
-// is outside 0 to 100"): the message's own name is dropped, the caller knows what it built.
+using FieldValues = std::vector<std::pair<std::string_view, codec::FieldValue>>;
+
+// `message` with each of `fields` set from what people give (a number, a word such as "open",
+// ...), in order; the first refusal is the Error.
+Result<codec::ToValveMessage> with_fields(codec::ToValveMessage message, const FieldValues& fields);
+
+// The command that carries `message` (serial, command_id and origin left for the sender), or the
+// codec's Error for a value the sheet does not allow.
 Result<ValveCommand> checked_command(const codec::ToValveMessage& message);
-
-// A refusal of the codec or the DDS contract without the message or command name they put
-// first ("manual: speed_percent 101 ..." -> "speed_percent 101 ..."); unchanged without one.
-std::string without_leading_name(std::string reason);
-
-// The codec's direction of a drive (open or close; anything else is close) and of Target Degrees.
-codec::Direction drive_direction(Direction direction);
-codec::TargetDirection target_direction(Direction direction);
 
 }  // namespace teejet::client

@@ -1,19 +1,30 @@
 #pragma once
 
-// The latest known state of every valve and gateway on a domain, as valvectl shows it. Pure
-// data: ValveView fills it from DDS samples, the renderers and the tests read it.
+// The latest known state of every valve and gateway on a domain, as clients show it. Pure data:
+// ValveView fills it from DDS samples, the renderers and the tests read it. Telemetry is kept as
+// the codec's messages, one per subject ("position", "current", ...), so that every client names,
+// ranges and prints every value through the codec's table, whatever message it is.
 
 #include <cstdint>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "teejet/codec/codec.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::client {
+
+// A valve's latest message of one subject, as the valve sent it.
+struct Reply {
+  std::uint64_t received_ns = 0;
+  codec::FromValveMessage message;
+
+  friend bool operator==(const Reply&, const Reply&) = default;
+};
 
 // One line of `valvectl list`.
 struct ValveRow {
@@ -22,10 +33,14 @@ struct ValveRow {
   bool online = false;
   bool boot_mode = false;
   std::string gateway;
-  std::optional<double> position_degrees;
-  std::optional<int> temperature_c;  // the valve's own, not its angle sensor's
-  std::optional<double> volts;
-  std::set<ErrorKind> errors;  // latched, until Clear Errors disposes them
+  std::set<ErrorKind> errors;                           // latched, until Clear Errors
+  std::map<std::string, Reply, std::less<>> telemetry;  // by subject, the latest of each
+
+  // The values `list` shows in columns, from the telemetry.
+  std::optional<double> position_degrees() const;
+  std::optional<int> temperature_c() const;  // the valve's own, not its angle sensor's
+  std::optional<double> volts() const;
+  const Reply* reply(std::string_view subject) const;  // nullptr before the first
 };
 
 struct GatewaySummary {
@@ -42,34 +57,21 @@ struct GatewaySummary {
   std::uint64_t rx_dropped = 0;
 };
 
-// A valve's answer to a request, as named fields in engineering units.
-struct Reply {
-  std::uint64_t received_ns = 0;
-  nlohmann::json values;  // e.g. {"volts": 12.1}
-};
-
-// The topic-level name of what a reply carries: "position", "baud_rate", ...; one per
-// telemetry type, so `request` can wait for the answer to what it asked.
-std::string reply_name(Telemetry telemetry);
-inline constexpr const char* kBaudRateReply = "baud_rate";
-
 class ValveTable {
  public:
   void on_presence(const ValvePresence& presence);
-  void on_position(std::uint32_t serial, double degrees, std::uint64_t received_ns);
-  void on_temperature(std::uint32_t serial, int valve_c, int sensor_c, std::uint64_t received_ns);
-  void on_voltage(std::uint32_t serial, double volts, std::uint64_t received_ns);
+  // Any telemetry message, kept as the latest of its subject.
+  void on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
+                    std::uint64_t received_ns);
   void on_error(std::uint32_t serial, ErrorKind kind);
   void on_error_cleared(std::uint32_t serial, ErrorKind kind);
   void on_gateway_status(const GatewayStatus& status);
-  // Any other telemetry: kept only as the latest reply of its kind.
-  void on_reply(std::uint32_t serial, const std::string& name, Reply reply);
 
   // Valves with a presence sample, by serial.
   std::vector<ValveRow> rows() const;
   std::optional<ValveRow> row(std::uint32_t serial) const;
   std::vector<GatewaySummary> gateways() const;  // by name
-  std::optional<Reply> reply(std::uint32_t serial, const std::string& name) const;
+  std::optional<Reply> reply(std::uint32_t serial, std::string_view subject) const;
   std::size_t online_count() const;
 
   // How many gateways discovery has found so far (writers of gateway status matched).
@@ -93,7 +95,6 @@ class ValveTable {
 
   std::map<std::uint32_t, Entry> rows_;
   std::map<std::string, GatewaySummary> gateways_;
-  std::map<std::pair<std::uint32_t, std::string>, Reply> replies_;
   std::size_t gateways_matched_ = 0;
 };
 

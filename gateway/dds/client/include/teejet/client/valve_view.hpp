@@ -1,8 +1,9 @@
 #pragma once
 
-// valvectl's window on the domain: subscribes to presence, telemetry, errors and gateway status
-// (durable topics, so a fresh valvectl sees everything at once) and keeps the latest per valve in
-// a ValveTable. Listeners only take samples into the table; callers wait on conditions over it.
+// A client's window on the domain: subscribes to presence, every telemetry topic, errors and
+// gateway status (durable topics, so a fresh client sees everything at once) and keeps the latest
+// per valve in a ValveTable. Listeners only take samples into the table; callers wait on
+// conditions over it.
 
 #include <atomic>
 #include <chrono>
@@ -13,11 +14,14 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <string>
+#include <type_traits>
 #include <utility>
+#include <variant>
 #include <vector>
 
-#include "teejet/dds/participant.hpp"
 #include "teejet/client/valve_table.hpp"
+#include "teejet/dds/participant.hpp"
 
 namespace teejet::client {
 
@@ -48,7 +52,9 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
   Reader subscribe(std::function<void(const Sample&)> on_sample);
-  Reader reader_of(const char* topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
+  Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
+  template <class... Samples>
+  void subscribe_telemetry(std::type_identity<std::variant<Samples...>>);
   void take_errors(Reader reader);
   // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
   // matched count: asking it with mutex_ held would invert the lock order, so this runs first

@@ -1,7 +1,8 @@
 #pragma once
 
 // snake_case names of the IDL's enumerations: how the gateway logs them, valvectl prints them and
-// JSON carries them, so that all three agree. Values the IDL does not define read "unknown".
+// JSON carries them, so that all three agree. Directions, error kinds and telemetry are the
+// codec's words (teejet/codec/table.hpp). Values the IDL does not define read "unknown".
 
 #include <string_view>
 
@@ -13,6 +14,7 @@ std::string_view to_string(CommandKind kind);     // "stop", "target_degrees", .
 std::string_view to_string(CommandState state);   // "accepted", ..., "superseded"
 std::string_view to_string(Direction direction);  // "close", "open", "shortest"
 std::string_view to_string(ErrorKind kind);       // "high_voltage", ..., "min_degrees_per_second"
+std::string_view to_string(Telemetry telemetry);  // "version", "position", ..., "cycle_counts"
 std::string_view to_string(BusState state);       // "error_active", ..., "bus_off", "down"
 
 }  // namespace teejet::dds

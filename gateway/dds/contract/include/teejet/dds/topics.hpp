@@ -1,60 +1,72 @@
 #pragma once
 
 // The public DDS contract: topic names and the QoS each side uses. docs/topics.md says the same
-// in words; change both together.
+// in words; tests/dds checks its topic table against this one.
 
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
+#include <string>
+#include <string_view>
+#include <type_traits>
 
+#include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
+#include "teejet/dds/participant.hpp"
 #include "teejet/valvePubSubTypes.h"
 
 namespace teejet::dds::topics {
 
 inline constexpr const char* kPresence = "teejet/valve/presence";
-inline constexpr const char* kPosition = "teejet/valve/position";
-inline constexpr const char* kVersion = "teejet/valve/version";
-inline constexpr const char* kTemperature = "teejet/valve/temperature";
-inline constexpr const char* kVoltage = "teejet/valve/voltage";
-inline constexpr const char* kCurrent = "teejet/valve/current";
-inline constexpr const char* kDegreesPerSecond = "teejet/valve/degrees_per_second";
-inline constexpr const char* kSpeedDirection = "teejet/valve/speed_direction";
-inline constexpr const char* kRunTime = "teejet/valve/run_time";
-inline constexpr const char* kCycleCount = "teejet/valve/cycle_count";
-inline constexpr const char* kBaudRate = "teejet/valve/baud_rate";
 inline constexpr const char* kError = "teejet/valve/error";
 inline constexpr const char* kCommand = "teejet/valve/command";
 inline constexpr const char* kCommandStatus = "teejet/valve/command_status";
 inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
 inline constexpr const char* kBusFrame = "teejet/can/frame";
+// Telemetry: "teejet/valve/" and the subject of the message the sample carries (the codec's
+// name of what its request asks for: position, current, cycle_counts, baud_rate, ...).
+inline constexpr std::string_view kTelemetryPrefix = "teejet/valve/";
 
-// The topic each sample type is published on, and its fastddsgen type support. There is no
-// entry for a type without a topic: using one is a compile error ("incomplete type").
+namespace detail {
+
+inline std::string topic_of(std::type_identity<ValvePresence>) { return kPresence; }
+inline std::string topic_of(std::type_identity<ValveError>) { return kError; }
+inline std::string topic_of(std::type_identity<ValveCommand>) { return kCommand; }
+inline std::string topic_of(std::type_identity<CommandStatus>) { return kCommandStatus; }
+inline std::string topic_of(std::type_identity<GatewayStatus>) { return kGatewayStatus; }
+inline std::string topic_of(std::type_identity<BusFrame>) { return kBusFrame; }
+
 template <class Sample>
-struct TopicOf;
+requires(kIsAlternative<Sample> && !std::is_same_v<Sample, ValveError>) std::string
+    topic_of(std::type_identity<Sample>) {
+  return std::string(kTelemetryPrefix) +
+         std::string(codec::subject(from_sample(TelemetrySample{Sample{}})));
+}
 
-#define TEEJET_TOPIC_OF(Sample, topic_name)          \
-  template <>                                        \
-  struct TopicOf<Sample> {                           \
-    static constexpr const char* kName = topic_name; \
-    using PubSubType = Sample##PubSubType;           \
-  }
-TEEJET_TOPIC_OF(ValvePresence, kPresence);
-TEEJET_TOPIC_OF(ValveVersion, kVersion);
-TEEJET_TOPIC_OF(ValvePosition, kPosition);
-TEEJET_TOPIC_OF(ValveTemperature, kTemperature);
-TEEJET_TOPIC_OF(ValveVoltage, kVoltage);
-TEEJET_TOPIC_OF(ValveCurrent, kCurrent);
-TEEJET_TOPIC_OF(ValveDegreesPerSecond, kDegreesPerSecond);
-TEEJET_TOPIC_OF(ValveSpeedDirection, kSpeedDirection);
-TEEJET_TOPIC_OF(ValveRunTime, kRunTime);
-TEEJET_TOPIC_OF(ValveCycleCount, kCycleCount);
-TEEJET_TOPIC_OF(ValveBaudRate, kBaudRate);
-TEEJET_TOPIC_OF(ValveError, kError);
-TEEJET_TOPIC_OF(ValveCommand, kCommand);
-TEEJET_TOPIC_OF(CommandStatus, kCommandStatus);
-TEEJET_TOPIC_OF(GatewayStatus, kGatewayStatus);
-TEEJET_TOPIC_OF(BusFrame, kBusFrame);
-#undef TEEJET_TOPIC_OF
+}  // namespace detail
+
+// The topic each sample type is published on. A type without a topic does not compile.
+template <class Sample>
+const std::string& topic_name() {
+  static const std::string name = detail::topic_of(std::type_identity<Sample>{});
+  return name;
+}
+
+// The topic of `Sample` in `participant`, registering its type support on first use.
+template <class Sample>
+Result<eprosima::fastdds::dds::Topic*> topic_of(Participant& participant) {
+  return participant.topic<typename PubSubTypeOf<Sample>::type>(topic_name<Sample>());
+}
+
+// Every sample type of the contract, in the order of docs/topics.md: presence, the telemetry
+// (errors last), the commands and their statuses, the gateways' status and the raw frames.
+template <class... Samples>
+struct SampleTypes {};
+template <class... Telemetry>
+constexpr auto every_sample_type(std::type_identity<std::variant<Telemetry...>>) {
+  return SampleTypes<ValvePresence, Telemetry..., ValveCommand, CommandStatus, GatewayStatus,
+                     BusFrame>{};
+}
+using EverySampleType = decltype(every_sample_type(std::type_identity<TelemetrySample>{}));
 
 // Every profile allows 4096 instances (valves, or valve and error kind) per topic.
 

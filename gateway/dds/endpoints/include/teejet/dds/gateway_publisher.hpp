@@ -15,7 +15,7 @@
 namespace teejet::dds {
 
 // One writer for each alternative of a sample variant, found by the sample's type. The topic
-// comes from topics::TopicOf<Sample>: a sample type without a topic does not compile.
+// comes from topics::topic_name<Sample>(): a sample type without a topic does not compile.
 template <class Variant>
 class SampleWriters;
 
@@ -41,8 +41,7 @@ class SampleWriters<std::variant<Samples...>> {
 
   template <class Sample>
   Status create_one(Participant& participant, const eprosima::fastdds::dds::DataWriterQos& qos) {
-    using Topic = topics::TopicOf<Sample>;
-    auto topic = participant.topic<typename Topic::PubSubType>(Topic::kName);
+    auto topic = topics::topic_of<Sample>(participant);
     if (!topic) return topic.error();
     auto writer = participant.writer(*topic, qos);
     if (!writer) return writer.error();
