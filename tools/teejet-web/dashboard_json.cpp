@@ -30,8 +30,7 @@ nlohmann::json valve_json(const client::ValveTable& table, const client::ValveRo
 
 nlohmann::json valves_json(const client::ValveTable& table, const Targets& targets) {
   nlohmann::json array = nlohmann::json::array();
-  for (const client::ValveRow& row : table.rows())
-    array.push_back(valve_json(table, row, targets));
+  for (const client::ValveRow& row : table.rows()) array.push_back(valve_json(table, row, targets));
   return array;
 }
 
@@ -94,25 +93,6 @@ std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
   statuses_.clear();
   return nlohmann::json{{"type", "update"}, {"tick", ++ticks_},     {"stamp_ms", stamp_ms},
                         {"valves", valves}, {"gateways", gateways}, {"statuses", statuses}};
-}
-
-void CommandTracker::on_sent(const ValveCommand& command) {
-  if (command.kind() == COMMAND_TARGET_DEGREES) {
-    // The wire's float, at its 0.1 degree grid, as positions are shown.
-    targets_[command.serial()] = client::at_resolution(command.degrees(), 10);
-    running_[command.serial()] = command.command_id();
-  } else {
-    targets_.erase(command.serial());
-    running_.erase(command.serial());
-  }
-}
-
-void CommandTracker::on_status(const CommandStatus& status) {
-  if (status.state() == COMMAND_ACCEPTED) return;
-  const auto running = running_.find(status.serial());
-  if (running == running_.end() || running->second != status.command_id()) return;
-  running_.erase(running);
-  targets_.erase(status.serial());
 }
 
 }  // namespace teejet::web

@@ -25,14 +25,14 @@
 #include <thread>
 #include <vector>
 
-#include "teejet/client/command_client.hpp"
 #include "dashboard_json.hpp"
 #include "listen_address.hpp"
 #include "page_command.hpp"
+#include "teejet/client/command_client.hpp"
+#include "teejet/client/valve_view.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/stop_signals.hpp"
-#include "teejet/client/valve_view.hpp"
 #include "web_assets.hpp"
 
 namespace {
@@ -111,8 +111,7 @@ class DdsSender final : public web::CommandSender {
       std::lock_guard lock(mutex_);
       if (client_) return client_.get();
     }
-    auto made =
-        client::CommandClient::create(participant_, client::default_origin("teejet-web"));
+    auto made = client::CommandClient::create(participant_, client::default_origin("teejet-web"));
     if (!made) return made.error();
     const std::size_t gateways = std::max<std::size_t>(1, view_.snapshot().gateways().size());
     const std::atomic<bool> never{false};
@@ -131,7 +130,7 @@ class DdsSender final : public web::CommandSender {
   std::mutex connect_mutex_;
   std::mutex mutex_;
   std::unique_ptr<client::CommandClient> client_;
-  web::CommandTracker tracker_;
+  web::TargetTracker tracker_;
   std::set<std::uint32_t> open_;  // command ids not yet final
 };
 
