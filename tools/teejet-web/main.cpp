@@ -28,6 +28,7 @@
 #include "dashboard_json.hpp"
 #include "listen_address.hpp"
 #include "page_command.hpp"
+#include "page_outbox.hpp"
 #include "teejet/client/command_client.hpp"
 #include "teejet/client/valve_view.hpp"
 #include "teejet/command_line.hpp"
@@ -48,8 +49,6 @@ constexpr auto kTickPeriod = std::chrono::milliseconds(40);
 // are refused, so that the threads left over always serve the page files and /api/valves.
 constexpr std::size_t kMaxPages = 48;
 constexpr std::size_t kHttpThreads = 8;
-// A page with this many messages not yet written (10 s of ticks) is not reading: it is dropped.
-constexpr std::size_t kMaxQueuedMessages = 250;
 // How long the first command waits for the gateways to match the command writer.
 constexpr auto kConnectTimeout = std::chrono::seconds(5);
 
@@ -134,67 +133,21 @@ class DdsSender final : public web::CommandSender {
   std::set<std::uint32_t> open_;  // command ids not yet final
 };
 
-// One open WebSocket. Its messages are written by a thread of its own, so that a page that stops
-// reading (a stalled browser, a dead link) blocks only that thread and never the tick that feeds
-// every page. A page whose outbox reaches kMaxQueuedMessages is dropped: its outbox is emptied, it
-// is fed no more and is sent a close (the browser reconnects and starts from a snapshot).
-class Page {
- public:
-  explicit Page(mg_connection* connection) : connection_(connection) {}
-  // Joins the writer: CivetWeb calls close() once the connection is done, so a write still
-  // under way fails at once.
-  ~Page() = default;
-  Page(const Page&) = delete;
-  Page& operator=(const Page&) = delete;
+// One open WebSocket: its outbox, and what it was last sent.
+struct Page {
+  explicit Page(mg_connection* connection)
+      : outbox([connection](web::PageOutbox::Frame frame, std::string_view data) {
+          mg_lock_connection(connection);
+          mg_websocket_write(connection,
+                             frame == web::PageOutbox::Frame::kText
+                                 ? MG_WEBSOCKET_OPCODE_TEXT
+                                 : MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE,
+                             data.data(), data.size());
+          mg_unlock_connection(connection);
+        }) {}
 
-  // Queues `message`; true when that dropped the page (the caller says so once).
-  bool post(const nlohmann::json& message) {
-    std::lock_guard lock(mutex_);
-    if (dropped_) return false;
-    if (outbox_.size() >= kMaxQueuedMessages) {
-      dropped_ = true;
-      outbox_.clear();
-      wake_.notify_one();
-      return true;
-    }
-    outbox_.push_back(message.dump());
-    wake_.notify_one();
-    return false;
-  }
-
+  web::PageOutbox outbox;
   web::UpdateBatcher batcher;  // under Server::mutex_
-
- private:
-  void run(const std::stop_token& stop) {
-    std::unique_lock lock(mutex_);
-    while (wake_.wait(lock, stop, [this] { return dropped_ || !outbox_.empty(); })) {
-      if (dropped_) {
-        lock.unlock();
-        static constexpr char kPolicyViolation[] = {0x03, static_cast<char>(0xF0)};  // 1008
-        write(MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE, {kPolicyViolation, 2});
-        return;
-      }
-      const std::string text = std::move(outbox_.front());
-      outbox_.pop_front();
-      lock.unlock();
-      write(MG_WEBSOCKET_OPCODE_TEXT, text);
-      lock.lock();
-    }
-  }
-
-  void write(int opcode, std::string_view data) {
-    mg_lock_connection(connection_);
-    mg_websocket_write(connection_, opcode, data.data(), data.size());
-    mg_unlock_connection(connection_);
-  }
-
-  mg_connection* const connection_;
-  std::mutex mutex_;
-  std::condition_variable_any wake_;
-  std::deque<std::string> outbox_;
-  bool dropped_ = false;
-  // Last: started once the members it uses exist, stopped and joined before they go.
-  std::jthread writer_{[this](const std::stop_token& stop) { run(stop); }};
 };
 
 // The open WebSockets, each with what it was last sent.
@@ -288,8 +241,8 @@ class Server {
 
  private:
   static void post(Page& page, const nlohmann::json& message) {
-    if (page.post(message)) {
-      std::cerr << "teejet-web: a page stopped reading (" << kMaxQueuedMessages
+    if (page.outbox.post(message)) {
+      std::cerr << "teejet-web: a page stopped reading (" << web::kMaxQueuedMessages
                 << " messages waiting): dropped\n";
     }
   }
