@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "command_samples.hpp"
 #include "dashboard_json.hpp"
 #include "web_fixture.hpp"
 
@@ -10,6 +11,7 @@ namespace {
 
 using nlohmann::json;
 using testing::presence;
+using testing::status;
 using testing::three_valves;
 
 GatewayStatus bench_status() {
@@ -26,26 +28,6 @@ GatewayStatus bench_status() {
   s.valves_online(2);
   s.valves_known(3);
   return s;
-}
-
-CommandStatus status(std::uint32_t serial, std::uint32_t id, CommandState state) {
-  CommandStatus s;
-  s.serial(serial);
-  s.command_id(id);
-  s.origin("teejet-web@host:1");
-  s.kind(COMMAND_TARGET_DEGREES);
-  s.state(state);
-  s.stamp_ns(1000);
-  return s;
-}
-
-ValveCommand move(std::uint32_t serial, std::uint32_t id, float degrees) {
-  ValveCommand c;
-  c.serial(serial);
-  c.command_id(id);
-  c.kind(COMMAND_TARGET_DEGREES);
-  c.degrees(degrees);
-  return c;
 }
 
 TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
@@ -165,30 +147,6 @@ TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
   EXPECT_EQ((*update)["statuses"][1]["command_id"], 7);
   EXPECT_EQ((*update)["statuses"][1]["serial"], "TJV000001");
   EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 80), std::nullopt);
-}
-
-TEST(WebTargets, AMoveSetsTheTargetUntilItsFinalStatus) {
-  CommandTracker tracker;
-  tracker.on_sent(move(1, 7, 74.6f));
-  EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
-  tracker.on_status(status(1, 7, COMMAND_ACCEPTED));
-  EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
-  tracker.on_status(status(1, 7, COMMAND_COMPLETED));
-  EXPECT_TRUE(tracker.targets().empty());
-}
-
-TEST(WebTargets, ALateStatusOfAnOlderMoveLeavesTheNewTargetAndAStopClearsIt) {
-  CommandTracker tracker;
-  tracker.on_sent(move(1, 7, 10.0f));
-  tracker.on_sent(move(1, 8, 20.0f));
-  tracker.on_status(status(1, 7, COMMAND_SUPERSEDED));
-  EXPECT_EQ(tracker.targets(), (Targets{{1, 20.0}}));
-  ValveCommand stop;
-  stop.serial(1);
-  stop.command_id(9);
-  stop.kind(COMMAND_STOP);
-  tracker.on_sent(stop);
-  EXPECT_TRUE(tracker.targets().empty());
 }
 
 }  // namespace

@@ -33,7 +33,7 @@ from web_client import Failure
 
 PORT = 18080
 TICK_S = 0.040
-MAX_PAGES = 48  # kMaxPages of main.cpp
+MAX_PAGES = 48  # kMaxPages of server.cpp
 SWITCHING = "HTTP/1.1 101 Switching Protocols"
 
 

@@ -2,7 +2,6 @@
 
 #include "teejet/client/json.hpp"
 #include "teejet/codec/table.hpp"
-#include "teejet/dds/conversions.hpp"
 #include "teejet/dds/names.hpp"
 
 namespace teejet::web {
@@ -94,27 +93,6 @@ std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
   statuses_.clear();
   return nlohmann::json{{"type", "update"}, {"tick", ++ticks_},     {"stamp_ms", stamp_ms},
                         {"valves", valves}, {"gateways", gateways}, {"statuses", statuses}};
-}
-
-void CommandTracker::on_sent(const ValveCommand& command) {
-  if (command.kind() == COMMAND_TARGET_DEGREES) {
-    // The wire's float, on the field's grid, as positions are shown.
-    if (const auto move = dds::to_message(command)) {
-      targets_[command.serial()] = std::get<codec::TargetDegrees>(codec::as_sent(*move)).degrees;
-    }
-    running_[command.serial()] = command.command_id();
-  } else {
-    targets_.erase(command.serial());
-    running_.erase(command.serial());
-  }
-}
-
-void CommandTracker::on_status(const CommandStatus& status) {
-  if (status.state() == COMMAND_ACCEPTED) return;
-  const auto running = running_.find(status.serial());
-  if (running == running_.end() || running->second != status.command_id()) return;
-  running_.erase(running);
-  targets_.erase(status.serial());
 }
 
 }  // namespace teejet::web

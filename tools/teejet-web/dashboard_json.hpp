@@ -12,14 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "target_tracker.hpp"
 #include "teejet/client/valve_table.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::web {
-
-// The target, in degrees, of the running Target Degrees command per valve, by serial: only what
-// teejet-web itself sent (see CommandTracker), since statuses of other senders are not followed.
-using Targets = std::map<std::uint32_t, double>;
 
 // The client's row (serial, address, online, boot_mode, position, temperature_c, volts, errors,
 // gateway, telemetry) with what the dashboard adds: "target" of the running command, "amps" and
@@ -63,19 +60,6 @@ class UpdateBatcher {
   std::map<std::string, nlohmann::json> sent_gateways_;
   std::vector<nlohmann::json> statuses_;
   std::uint64_t ticks_ = 0;
-};
-
-// Follows the commands teejet-web sent, for the "target" of each valve: a Target Degrees
-// command sets it, any other command to the valve or a final status of the move clears it.
-class CommandTracker {
- public:
-  void on_sent(const ValveCommand& command);  // serial and command_id set
-  void on_status(const CommandStatus& status);
-  const Targets& targets() const { return targets_; }
-
- private:
-  Targets targets_;
-  std::map<std::uint32_t, std::uint32_t> running_;  // command_id of each target, by serial
 };
 
 }  // namespace teejet::web

@@ -1,0 +1,74 @@
+#include "sender.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <iterator>
+#include <utility>
+
+namespace teejet::web {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// How long the first command waits for the gateways to match the command writer.
+constexpr auto kConnectTimeout = std::chrono::seconds(5);
+
+}  // namespace
+
+Result<std::uint32_t> DdsSender::send(ValveCommand command) {
+  auto client = connected();
+  if (!client) return client.error();
+  std::lock_guard lock(mutex_);
+  const auto id = (*client)->send(command);
+  if (!id) return Error{ErrorCode::kInvalidValue, "DDS did not take the command"};
+  command.command_id(*id);
+  tracker_.on_sent(command);
+  open_.insert(*id);
+  return *id;
+}
+
+std::vector<CommandStatus> DdsSender::take_statuses() {
+  std::lock_guard lock(mutex_);
+  std::vector<CommandStatus> statuses;
+  if (!client_) return statuses;
+  for (auto it = open_.begin(); it != open_.end();) {
+    bool final = false;
+    while (const auto status = client_->next_status(*it, Clock::now())) {
+      tracker_.on_status(*status);
+      statuses.push_back(*status);
+      final = final || status->state() != COMMAND_ACCEPTED;
+    }
+    it = final ? open_.erase(it) : std::next(it);
+  }
+  return statuses;
+}
+
+Targets DdsSender::targets() {
+  std::lock_guard lock(mutex_);
+  return tracker_.targets();
+}
+
+// Connects on the first command: a read-only dashboard never announces a command writer.
+// Under its own lock, so that ticks go on while discovery takes its time.
+Result<client::CommandClient*> DdsSender::connected() {
+  std::lock_guard connecting(connect_mutex_);
+  {
+    std::lock_guard lock(mutex_);
+    if (client_) return client_.get();
+  }
+  auto made = client::CommandClient::create(participant_, client::default_origin("teejet-web"));
+  if (!made) return made.error();
+  const std::size_t gateways = std::max<std::size_t>(1, view_.snapshot().gateways().size());
+  const std::atomic<bool> never{false};
+  const auto matched = (*made)->connect(gateways, 0, Clock::now() + kConnectTimeout, never);
+  if (!matched) return matched.error();
+  if (!*matched) {
+    return Error{ErrorCode::kInvalidValue, "no gateway subscribes to commands (waited 5 s)"};
+  }
+  std::lock_guard lock(mutex_);
+  client_ = std::move(*made);
+  return client_.get();
+}
+
+}  // namespace teejet::web

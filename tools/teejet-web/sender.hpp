@@ -1,0 +1,48 @@
+#pragma once
+
+// How the page's commands reach the valves: through the DDS client's CommandClient, whose
+// statuses are followed for the ticks, and for the targets of teejet-web's own moves.
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <vector>
+
+#include "page_command.hpp"
+#include "target_tracker.hpp"
+#include "teejet/client/command_client.hpp"
+#include "teejet/client/valve_view.hpp"
+#include "teejet/core/result.hpp"
+#include "teejet/dds/participant.hpp"
+#include "teejet/valve.h"
+
+namespace teejet::web {
+
+// Thread-safe: the WebSocket callbacks send while the tick takes statuses and targets.
+class DdsSender final : public CommandSender {
+ public:
+  // `view` tells how many gateways to wait for on the first command; both must outlive this.
+  DdsSender(dds::Participant& participant, client::ValveView& view)
+      : participant_(participant), view_(view) {}
+
+  Result<std::uint32_t> send(ValveCommand command) override;
+
+  // The statuses that arrived since the last call, in order; the tick hands them to every page.
+  std::vector<CommandStatus> take_statuses();
+
+  Targets targets();
+
+ private:
+  Result<client::CommandClient*> connected();
+
+  dds::Participant& participant_;
+  client::ValveView& view_;
+  std::mutex connect_mutex_;
+  std::mutex mutex_;
+  std::unique_ptr<client::CommandClient> client_;
+  TargetTracker tracker_;
+  std::set<std::uint32_t> open_;  // command ids not yet final
+};
+
+}  // namespace teejet::web
