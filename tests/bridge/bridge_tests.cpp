@@ -249,7 +249,7 @@ TEST_F(BridgeTest, OutOfRangeCommandIsRejectedWithReasonAndNeverReachesTheBus) {
   shortest.direction(DIRECTION_SHORTEST);
   command_at(bridge, kStart, shortest);
   EXPECT_EQ(sink.last_reason(),
-            "degrees_from_position: direction SHORTEST exists only for Target Degrees");
+            "degrees_from_position: direction \"shortest\" is not one of close, open");
   EXPECT_TRUE(sent().empty());
   EXPECT_EQ(bridge.counters().commands_rejected, 3u);
 }

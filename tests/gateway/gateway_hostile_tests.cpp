@@ -266,7 +266,7 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   statuses = run(version);
   ASSERT_EQ(Peer::states(statuses), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(statuses[0].reason().to_string(),
-            "request: version is sent once; resend_tenths must be 0");
+            "version: resend_tenths 1 is not 0: the valve sends it once");
   // The slowest resend the sheet allows, 25.5 s: answered once now.
   auto slowest = command(1, COMMAND_REQUEST);
   slowest.telemetry(TELEMETRY_TEMPERATURE);

@@ -368,6 +368,11 @@ std::map<std::string, std::string> disposed(const std::string& topic) {
   return {{"dds_topic", topic}, {"instance_state", "disposed"}};
 }
 
+template <class... Samples>
+nlohmann::json contract_topics(topics::SampleTypes<Samples...>) {
+  return nlohmann::json::array({topics::topic_name<Samples>()...});
+}
+
 std::vector<ChannelSpec> known_channels() {
   using namespace teejet;
   constexpr std::uint32_t kA = 0x123456;  // TJV1193046
@@ -559,6 +564,8 @@ int main(int argc, char** argv) {
                         {"data", channel.samples[m.sequence - 1].data}});
   }
   write_text(dir + "/known.json", expected.dump(1) + "\n");
+  // Every topic of the contract, for the check that the known recording covers them all.
+  write_text(dir + "/contract-topics.json", contract_topics(topics::EverySampleType{}).dump() + "\n");
 
   // A schema name that valve.idl does not define: the channel cannot be decoded.
   std::vector<ChannelSpec> unknown = {{topics::topic_name<teejet::ValvePosition>(),

@@ -24,7 +24,7 @@
 namespace teejet::dds {
 
 // Every telemetry type a valve's message can become, each published on its own topic.
-using TelemetrySample = std::variant<ValveVersion, ValvePosition, ValveTemperature, ValveVoltage,
+using TelemetrySample = std::variant<ValvePosition, ValveVersion, ValveTemperature, ValveVoltage,
                                      ValveCurrent, ValveDegreesPerSecond, ValveSpeedDirection,
                                      ValveRunTime, ValveCycleCounts, ValveBaudRate, ValveError>;
 
