@@ -8,13 +8,14 @@
 #include <array>
 #include <csignal>
 
+#include "teejet/command_line.hpp"
 #include "teejet/gateway/config.hpp"
 #include "teejet/gateway/gateway.hpp"
-#include "teejet/command_line.hpp"
 
 namespace {
 
 constexpr int kExitUsage = 2;
+constexpr int kExitCannotStart = 1;
 
 // The signals that end the gateway, each through the same safe stop (docs/gateway.md). A stop
 // asked for (SIGINT, SIGTERM) exits 0; the others exit 128 + n, as a shell reports a death by
@@ -55,71 +56,73 @@ std::string default_gateway_name() {
   return std::string("teejet-gateway@") + host;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  survive_failed_writes();
-  CLI::App app{"Puts every TeeJet CAN valve on DDS, keyed by serial, and carries commands back.",
-               "teejet-gateway"};
-  app.set_version_flag("--version", "teejet-gateway " TEEJET_VERSION);
+// The options as given; configure() applies only those the user named (app.count()).
+struct Arguments {
   std::string can, profile, config_file, name, log_level = "info";
   int domain = 0;
   bool allow_baud_change = false, keep_valves_running = false, record_frames = false;
-  app.add_option("--can", can,
+};
+
+void add_options(CLI::App& app, Arguments& arguments) {
+  app.add_option("--can", arguments.can,
                  "SocketCAN interface (can0, vcan0), or sim:N for N simulated valves in-process")
       ->type_name("IFACE|sim:N");
-  app.add_option("--domain", domain, "DDS domain id")
+  app.add_option("--domain", arguments.domain, "DDS domain id")
       ->check(CLI::Range(0, teejet::dds::kMaxDomain));
-  app.add_option("--profile", profile, "Fast DDS XML profile file")->check(CLI::ExistingFile);
-  app.add_option("-c,--config", config_file, "YAML configuration (docs/gateway.md)")
+  app.add_option("--profile", arguments.profile, "Fast DDS XML profile file")
       ->check(CLI::ExistingFile);
-  app.add_option("--name", name,
+  app.add_option("-c,--config", arguments.config_file, "YAML configuration (docs/gateway.md)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--name", arguments.name,
                  "gateway name in presence and status (default: teejet-gateway@HOST)");
-  app.add_flag("--allow-baud-change", allow_baud_change,
+  app.add_flag("--allow-baud-change", arguments.allow_baud_change,
                "let DDS clients change a valve's CAN bit rate (refused otherwise)");
-  app.add_flag("--keep-valves-running", keep_valves_running,
+  app.add_flag("--keep-valves-running", arguments.keep_valves_running,
                "do not send Stop to every valve on exit");
-  app.add_flag("--record-frames", record_frames,
+  app.add_flag("--record-frames", arguments.record_frames,
                "publish every CAN frame sent and received on teejet/can/frame (best effort)");
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
+  app.add_option("--log-level", arguments.log_level, "trace, debug, info, warn, error")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error"}));
-  teejet::command_line::refuse_empty_values(app);
-  if (const auto exit_status = teejet::command_line::parse(app, argc, argv, kExitUsage)) {
-    return *exit_status;
-  }
-  spdlog::set_level(spdlog::level::from_str(log_level));
+}
 
+// The defaults, then the config file, then the flags given on the command line, which win.
+teejet::Result<teejet::gateway::GatewayConfig> configure(const CLI::App& app,
+                                                         const Arguments& arguments) {
   teejet::gateway::GatewayConfig config;
   config.bridge.gateway_name = default_gateway_name();
-  if (!config_file.empty()) {
-    auto loaded = teejet::gateway::load_config_file(config_file, config);
-    if (!loaded) {
-      spdlog::error("{}", loaded.error().reason);
-      return kExitUsage;
-    }
+  if (!arguments.config_file.empty()) {
+    auto loaded = teejet::gateway::load_config_file(arguments.config_file, config);
+    if (!loaded) return loaded.error();
     config = std::move(loaded).value();
   }
-  // Flags given on the command line win over the file.
-  if (app.count("--can")) config.can = can;
-  if (app.count("--domain")) config.domain = domain;
-  if (app.count("--profile")) config.profile_file = profile;
-  if (app.count("--name")) config.bridge.gateway_name = name;
-  if (allow_baud_change) config.bridge.allow_baud_change = true;
-  if (keep_valves_running) config.stop_valves_on_exit = false;
-  if (record_frames) config.record_frames = true;
+  if (app.count("--can")) config.can = arguments.can;
+  if (app.count("--domain")) config.domain = arguments.domain;
+  if (app.count("--profile")) config.profile_file = arguments.profile;
+  if (app.count("--name")) config.bridge.gateway_name = arguments.name;
+  if (arguments.allow_baud_change) config.bridge.allow_baud_change = true;
+  if (arguments.keep_valves_running) config.stop_valves_on_exit = false;
+  if (arguments.record_frames) config.record_frames = true;
   if (config.can.empty()) {
-    spdlog::error("no CAN bus: give --can IFACE (or sim:N), or gateway.can in the config file");
-    return kExitUsage;
+    return teejet::Error{
+        teejet::ErrorCode::kInvalidValue,
+        "no CAN bus: give --can IFACE (or sim:N), or gateway.can in the config file"};
   }
+  return config;
+}
 
-  // Signals are taken synchronously by this thread; every thread started later inherits the mask.
-  // One that arrives while the gateway starts waits until it runs, and one that arrives during
-  // the safe stop cannot cut it short.
+// Signals are taken synchronously by run()'s sigwait(); every thread started later inherits the
+// mask. One that arrives while the gateway starts waits until it runs, and one that arrives
+// during the safe stop cannot cut it short.
+sigset_t block_ending_signals() {
   sigset_t signals;
   sigemptyset(&signals);
   for (const auto& ending : kEndingSignals) sigaddset(&signals, ending.number);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
+}
 
+// Runs the gateway until one of `signals` ends it; returns the exit status.
+int run(const teejet::gateway::GatewayConfig& config, const sigset_t& signals) {
   auto backend = teejet::gateway::make_bus_backend(config);
   if (!backend) {
     spdlog::error("{}", backend.error().reason);
@@ -128,7 +131,7 @@ int main(int argc, char** argv) {
   teejet::gateway::Gateway gateway(config, std::move(*backend));
   if (auto started = gateway.start(); !started) {
     spdlog::error("cannot start: {}", started.error().reason);
-    return 1;
+    return kExitCannotStart;
   }
   int number = SIGTERM;
   sigwait(&signals, &number);
@@ -136,4 +139,26 @@ int main(int argc, char** argv) {
   spdlog::info("{}: shutting down", ending.name);
   gateway.stop();
   return ending.exit_status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  survive_failed_writes();
+  CLI::App app{"Puts every TeeJet CAN valve on DDS, keyed by serial, and carries commands back.",
+               "teejet-gateway"};
+  app.set_version_flag("--version", "teejet-gateway " TEEJET_VERSION);
+  Arguments arguments;
+  add_options(app, arguments);
+  teejet::command_line::refuse_empty_values(app);
+  if (const auto exit_status = teejet::command_line::parse(app, argc, argv, kExitUsage)) {
+    return *exit_status;
+  }
+  spdlog::set_level(spdlog::level::from_str(arguments.log_level));
+  const auto config = configure(app, arguments);
+  if (!config) {
+    spdlog::error("{}", config.error().reason);
+    return kExitUsage;
+  }
+  return run(*config, block_ending_signals());
 }

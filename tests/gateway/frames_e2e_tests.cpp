@@ -9,19 +9,21 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <vector>
 
-#include "teejet/gateway/config.hpp"
 #include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
+#include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/dds/frame_publisher.hpp"
 #include "teejet/dds/topics.hpp"
+#include "teejet/gateway/config.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -169,30 +171,53 @@ TEST(RecordFrames, WithoutTheOptionNoFrameWriterExists) {
   EXPECT_TRUE(take_frames(frames, all).empty());
 }
 
-// The one conversion between codec::CanFrame and the IDL's BusFrame, without DDS.
-TEST(ToBusFrame, CarriesTheWireAndNothingElse) {
-  const Timestamp stamp = from_unix_nanoseconds(1'700'000'000'123'456'789);
-  const codec::CanFrame stop{.id = 0x18EFD9D5, .dlc = 1, .data = {0x00, 0xAA, 0xAA}};
-  const auto sent = dds::to_bus_frame(stop, can::FrameDirection::kSent, stamp, "gw", "can0");
-  EXPECT_EQ(sent.gateway().to_string(), "gw");
-  EXPECT_EQ(sent.can_interface().to_string(), "can0");
-  EXPECT_EQ(sent.id(), 0x18EFD9D5u);
-  EXPECT_TRUE(sent.extended());
-  EXPECT_EQ(sent.dlc(), 1);
-  EXPECT_EQ(sent.data(), std::vector<std::uint8_t>{0x00});  // dlc bytes, not the array
-  EXPECT_EQ(sent.direction(), FRAME_SENT);
-  EXPECT_EQ(sent.stamp_ns(), 1'700'000'000'123'456'789u);
+// What the gateway publishes reads back, through DDS and bus_frame::to_can_frame() as every
+// reader of recordings does, as the frame that was on the bus: remote frames included.
+TEST(FramePublisher, EveryFrameReadsBackAsTheFrameThatWasOnTheBus) {
+  Ecu gateway_side(test_domain(), "frame-publisher");
+  Ecu recorder(test_domain(), "frame-reader");
+  DataReader* frames = recorder.reader<BusFrame>(dds::topics::frame_reader_qos());
+  ASSERT_NE(frames, nullptr);
+  auto publisher = dds::FramePublisher::create(gateway_side.participant(), "gw", "can0");
+  ASSERT_TRUE(publisher) << publisher.error().reason;
 
-  const codec::CanFrame remote{.id = 0x123, .extended = false, .remote = true, .dlc = 4};
-  const auto request = dds::to_bus_frame(remote, can::FrameDirection::kReceived, stamp, "gw", "x");
-  EXPECT_EQ(request.direction(), FRAME_RECEIVED);
-  EXPECT_FALSE(request.extended());
-  EXPECT_EQ(request.dlc(), 4);
-  EXPECT_TRUE(request.data().empty());  // a remote frame carries no data
-
-  const std::string long_name(100, 'g');
-  const auto cut = dds::to_bus_frame(stop, can::FrameDirection::kSent, stamp, long_name, "can0");
-  EXPECT_EQ(cut.gateway().to_string(), std::string(64, 'g'));  // the IDL's string<64>
+  const std::vector<codec::CanFrame> on_the_bus{
+      {.id = 0x18EFD9D5, .dlc = 1, .data = {0x00}},
+      {.id = 0x123, .extended = false, .remote = true, .dlc = 4},
+      {.id = 0x18EFD5D8, .remote = true, .dlc = 0},
+  };
+  // Frame i is stamped base + i ns, which tells it apart when it arrives.
+  constexpr std::uint64_t base = 1'700'000'000'123'456'789;
+  std::vector<Received> all;
+  const auto arrived = [&](std::size_t i) {
+    return std::any_of(all.begin(), all.end(),
+                       [&](const Received& r) { return r.frame.stamp_ns() == base + i; });
+  };
+  // Best effort drops what is written before the writer has matched the reader: the frames go
+  // out again until each of them arrived.
+  ASSERT_TRUE(eventually(
+      [&] {
+        for (std::size_t i = 0; i < on_the_bus.size(); ++i) {
+          (*publisher)
+              ->on_frame(on_the_bus[i], can::FrameDirection::kReceived,
+                         from_unix_nanoseconds(base + i));
+        }
+        take_frames(frames, all);
+        return arrived(0) && arrived(1) && arrived(2);
+      },
+      15s))
+      << all.size() << " frames arrived, not one of each";
+  for (const auto& r : all) {
+    const std::uint64_t i = r.frame.stamp_ns() - base;
+    ASSERT_LT(i, on_the_bus.size()) << r.frame.stamp_ns();
+    const auto frame = bus_frame::to_can_frame(r.frame);
+    ASSERT_TRUE(frame) << i << ": " << frame.error().reason;
+    EXPECT_EQ(*frame, on_the_bus[i]) << i;
+    EXPECT_EQ(r.frame.direction(), FRAME_RECEIVED);
+    EXPECT_EQ(r.frame.gateway().to_string(), "gw");
+    EXPECT_EQ(r.frame.can_interface().to_string(), "can0");
+    EXPECT_EQ(r.source_ns, r.frame.stamp_ns());
+  }
 }
 
 TEST(RecordFramesConfig, OffByDefaultAndReadFromTheGatewaySection) {

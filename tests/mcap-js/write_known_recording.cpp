@@ -19,6 +19,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -341,15 +342,18 @@ Sample gateway_status(const GatewayValues& v) {
                   {"stamp_ns", u64(v.stamp)}});
 }
 
+// A data frame of `data`; a remote frame (remote_dlc) asks for that many bytes and carries none.
 Sample frame(const std::string& gateway, const std::string& interface, std::uint32_t id,
              bool extended, const std::vector<std::uint8_t>& data, teejet::FrameDirection direction,
-             std::uint64_t ns) {
+             std::uint64_t ns, std::optional<std::uint8_t> remote_dlc = std::nullopt) {
+  const auto dlc = remote_dlc.value_or(static_cast<std::uint8_t>(data.size()));
   teejet::BusFrame s;
   s.gateway(gateway);
   s.can_interface(interface);
   s.id(id);
   s.extended(extended);
-  s.dlc(static_cast<std::uint8_t>(data.size()));
+  s.remote(remote_dlc.has_value());
+  s.dlc(dlc);
   s.data(data);
   s.direction(direction);
   s.stamp_ns(ns);
@@ -357,7 +361,8 @@ Sample frame(const std::string& gateway, const std::string& interface, std::uint
                   {"can_interface", interface},
                   {"id", id},
                   {"extended", extended},
-                  {"dlc", data.size()},
+                  {"remote", remote_dlc.has_value()},
+                  {"dlc", dlc},
                   {"data", data},
                   {"direction", static_cast<std::uint32_t>(direction)},
                   {"stamp_ns", u64(ns)}});
@@ -466,6 +471,8 @@ std::vector<ChannelSpec> known_channels() {
                            extended ? 0x18EF00FFU + length : 0x7F0U + length, extended, data,
                            length % 3 == 0 ? FRAME_SENT : FRAME_RECEIVED, kAbove53 + 100 + length));
   }
+  // A remote frame: a dlc of 4 and no data.
+  frames.push_back(frame("boom-left", "can0", 0x123, false, {}, FRAME_RECEIVED, kAbove53 + 109, 4));
   add(topics::kBusFrame, "BusFrame", std::move(frames));
   return channels;
 }

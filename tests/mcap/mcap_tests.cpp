@@ -149,6 +149,118 @@ TEST(McapReader, ADamagedSummaryIsAnError) {
   EXPECT_NE(summary.error().reason.find("the summary's CRC does not match"), std::string::npos);
 }
 
+// Little-endian fields of a file, for the tests that damage one on purpose.
+std::uint64_t field_at(const Bytes& file, std::size_t at, std::size_t size) {
+  std::uint64_t value = 0;
+  for (std::size_t i = 0; i < size; ++i) value |= std::uint64_t{file.at(at + i)} << (8 * i);
+  return value;
+}
+void set_field(Bytes& file, std::size_t at, std::size_t size, std::uint64_t value) {
+  for (std::size_t i = 0; i < size; ++i) {
+    file.at(at + i) = static_cast<std::uint8_t>(value >> (8 * i));
+  }
+}
+
+// The Footer (https://mcap.dev/spec#footer-op0x02) right before the closing magic: opcode,
+// length, summary_start, summary_offset_start, summary_crc.
+struct FooterAt {
+  std::size_t record, summary_start, summary_offset_start, summary_crc;
+};
+FooterAt footer_of(const Bytes& file) {
+  const std::size_t record = file.size() - 8 - (1 + 8 + 8 + 8 + 4);
+  return {record, record + 9, record + 17, record + 25};
+}
+
+// Where the first summary record of `opcode` starts.
+std::size_t summary_record(const Bytes& file, Opcode opcode) {
+  const auto footer = footer_of(file);
+  std::size_t at = field_at(file, footer.summary_start, 8);
+  while (file.at(at) != static_cast<std::uint8_t>(opcode)) at += 9 + field_at(file, at + 1, 8);
+  return at;
+}
+
+std::string damaged_at(std::size_t at, const std::string& what) {
+  return "damaged MCAP file at byte " + std::to_string(at) + ": " + what;
+}
+
+TEST(McapReader, TheFooterIsCheckedBeforeTheSummaryIsRead) {
+  const Recorded recorded = record("zstd", 100000, 20);
+  const auto footer = footer_of(recorded.file);
+  {
+    Bytes file = recorded.file;
+    file[footer.record] = static_cast<std::uint8_t>(Opcode::kDataEnd);
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(footer.record, "the record before the closing magic is not a Footer"));
+  }
+  {
+    Bytes file = recorded.file;
+    set_field(file, footer.summary_start, 8, footer.record + 1);
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(footer.record, "the footer points outside the file"));
+  }
+  {
+    Bytes file = recorded.file;
+    set_field(file, footer.summary_offset_start, 8, field_at(file, footer.summary_start, 8) - 1);
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(footer.record, "the footer points outside the file"));
+  }
+  {
+    Bytes file = recorded.file;
+    set_field(file, footer.summary_start, 8, 0);  // a writer that wrote no summary
+    const auto summary = read_summary(file);
+    ASSERT_TRUE(summary.ok()) << summary.error().reason;
+    EXPECT_FALSE(summary->has_value());
+  }
+  {
+    Bytes file = recorded.file;
+    file.back() ^= 0x01;  // no closing magic: not closed
+    const auto summary = read_summary(file);
+    ASSERT_TRUE(summary.ok()) << summary.error().reason;
+    EXPECT_FALSE(summary->has_value());
+  }
+}
+
+TEST(McapReader, ASummaryRecordThatDoesNotParseNamesItsOffset) {
+  Recorded recorded = record("zstd", 100, 20);
+  const auto footer = footer_of(recorded.file);
+  set_field(recorded.file, footer.summary_crc, 4, 0);  // no CRC: the records themselves are read
+  {
+    Bytes file = recorded.file;
+    const std::size_t statistics = summary_record(file, Opcode::kStatistics);
+    set_field(file, statistics + 1, 8, 8);  // a message count and nothing more
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(statistics, "the Statistics record does not parse"));
+  }
+  {
+    Bytes file = recorded.file;
+    const std::size_t index = summary_record(file, Opcode::kChunkIndex);
+    set_field(file, index + 9 + 16, 8, file.size());  // chunk_start_offset
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(index, "a Chunk Index points outside the file"));
+  }
+  {
+    Bytes file = recorded.file;
+    const std::size_t schema = summary_record(file, Opcode::kSchema);
+    set_field(file, schema + 1, 8, file.size());
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(schema, "a summary record is cut short"));
+  }
+  {
+    Bytes file = recorded.file;
+    const std::size_t channel = summary_record(file, Opcode::kChannel);
+    set_field(file, channel + 9 + 4, 4, 1000);  // the topic's length
+    EXPECT_EQ(read_summary(file).error().reason,
+              damaged_at(channel, "a Channel record does not parse"));
+  }
+  const auto summary = read_summary(recorded.file);
+  ASSERT_TRUE(summary.ok()) << summary.error().reason;
+  ASSERT_TRUE(summary->has_value());
+  EXPECT_EQ((*summary)->statistics.message_count, 20u);
+  EXPECT_EQ((*summary)->channels.size(), 2u);
+  EXPECT_EQ((*summary)->schemas.size(), 1u);
+  EXPECT_GT((*summary)->chunk_indexes.size(), 1u);
+}
+
 TEST(McapReader, ForeignFilesAreRefusedClearly) {
   EXPECT_EQ(read_messages(bytes_of("(1700000000.000000) vcan0 18EFD5D8#0203\n"), {}).error().reason,
             "not an MCAP file: wrong magic bytes");

@@ -210,6 +210,20 @@ TEST_F(RecordingFiles, APayloadThatIsNotItsTypeIsCountedNotPublished) {
             "teejet/valve/position #3: a 5-byte payload is not a CDR teejet::ValvePosition");
 }
 
+TEST_F(RecordingFiles, APayloadCdrRefusesIsCountedNotACrash) {
+  // An encapsulation CDR does not know, then a whole ValvePosition's bytes.
+  Bytes payload = position_payload(1, 0.0f);
+  payload[1] = 0x7F;
+  const auto path =
+      save("encapsulation.mcap", make_file({.messages = 2, .payload_override = payload}));
+  const auto replayed = replay_file(path);
+  ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+  EXPECT_EQ(replayed->published, 0u);
+  EXPECT_EQ(replayed->failed, 2u);
+  EXPECT_EQ(replayed->last_failure,
+            "teejet/valve/position #2: a 20-byte payload is not a CDR teejet::ValvePosition");
+}
+
 TEST_F(RecordingFiles, StartAndEndPickAWindowOfTheRecording) {
   // 12 messages 1 ms apart: 5 ms to 8 ms in are the 6th to the 9th.
   const auto path = save("window.mcap", make_file({}));

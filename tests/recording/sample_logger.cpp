@@ -137,6 +137,7 @@ json fields(const teejet::BusFrame& s) {
           {"can_interface", s.can_interface().to_string()},
           {"id", s.id()},
           {"extended", s.extended()},
+          {"remote", s.remote()},
           {"dlc", s.dlc()},
           {"data", s.data()},
           {"direction", static_cast<int>(s.direction())},

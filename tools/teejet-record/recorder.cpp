@@ -31,15 +31,58 @@ constexpr Duration kReportPeriod = 1s;
 // they are written, and go out sorted.
 constexpr std::uint64_t kReorderWindowNs = 100'000'000;
 
-std::uint64_t now_ns() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
+// Taken, not yet written: ordered by reception time (then by the order taken), with the index of
+// the sample's topic.
+using Pending = std::multimap<std::uint64_t, std::pair<std::size_t, TakenSample>>;
 
-struct Subscription {
-  const TopicType* type;
-  std::unique_ptr<recording::TopicReader> reader;
+// The readers of the recorded topics, in the order of their types, and the one WaitSet that wakes
+// the recorder's thread when any of them has data.
+class TopicReaders {
+ public:
+  static Result<std::unique_ptr<TopicReaders>> open(dds::Participant& participant,
+                                                    const std::vector<std::string>& topics) {
+    std::unique_ptr<TopicReaders> readers(new TopicReaders());
+    for (const auto& name : topics) {
+      const TopicType* type = recording::find_topic(name);
+      auto reader = type->open_reader(participant);
+      if (!reader) return reader.error();
+      auto& condition = (*reader)->reader()->get_statuscondition();
+      condition.set_enabled_statuses(eprosima::fastdds::dds::StatusMask::data_available());
+      readers->wait_set_.attach_condition(condition);
+      readers->types_.push_back(type);
+      readers->readers_.push_back(std::move(*reader));
+    }
+    return readers;
+  }
+
+  const std::vector<const TopicType*>& types() const { return types_; }
+
+  // Returns when a reader has data or `timeout` has passed.
+  void wait(Duration timeout) {
+    eprosima::fastdds::dds::ConditionSeq active;
+    wait_set_.wait(active, dds::to_dds_duration(timeout));
+  }
+
+  // Moves what every reader holds into `pending`; a sample that came without a reception time
+  // counts as received at `taken_at`.
+  void take_into(Pending& pending, std::uint64_t taken_at) {
+    for (std::size_t i = 0; i < readers_.size(); ++i) {
+      taken_.clear();
+      readers_[i]->take(taken_);
+      for (auto& sample : taken_) {
+        if (sample.received_ns == 0) sample.received_ns = taken_at;
+        pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
+      }
+    }
+  }
+
+ private:
+  TopicReaders() = default;
+
+  std::vector<const TopicType*> types_;
+  std::vector<std::unique_ptr<recording::TopicReader>> readers_;
+  eprosima::fastdds::dds::WaitSet wait_set_;
+  std::vector<TakenSample> taken_;  // kept between takes for its capacity
 };
 
 // The last sample of each instance, per topic: what a disposal's channel shows (a disposal
@@ -146,8 +189,8 @@ class CandumpFile {
 
 class Recording {
  public:
-  Recording(const RecorderOptions& options, std::vector<Subscription>& topics)
-      : options_(options), topics_(topics) {}
+  Recording(const RecorderOptions& options, std::vector<const TopicType*> types)
+      : options_(options), types_(std::move(types)) {}
 
   Status start() {
     if (!options_.candump_path.empty()) {
@@ -159,7 +202,7 @@ class Recording {
   }
 
   Status write(std::size_t topic, TakenSample& sample) {
-    const TopicType& type = *topics_[topic].type;
+    const TopicType& type = *types_[topic];
     const std::uint64_t log_time = sample.received_ns;
     const std::uint64_t publish_time = sample.source_ns != 0 ? sample.source_ns : log_time;
     const auto key = std::pair{topic, sample.instance};
@@ -214,7 +257,8 @@ class Recording {
     return finished;
   }
 
-  Progress& progress() {
+  const Progress& progress(Duration elapsed) {
+    progress_.elapsed = elapsed;
     progress_.file_bytes = closed_bytes_ + (file_ ? file_->bytes() : 0);
     return progress_;
   }
@@ -226,11 +270,11 @@ class Recording {
     if (auto finished = file_->finish(); !finished) return finished;
     closed_bytes_ += file_->bytes();
     if (auto opened = open_next(); !opened) return opened;
-    const std::uint64_t now = now_ns();
+    const std::uint64_t now = unix_nanoseconds(clock_->wall());
     messages_in_file_ = 0;
     for (const auto& [key, last] : last_samples_) {
-      if (auto written = file_->write(key.first, *topics_[key.first].type, false, now,
-                                      last.source_ns, last.payload);
+      if (auto written =
+              file_->write(key.first, *types_[key.first], false, now, last.source_ns, last.payload);
           !written) {
         return written;
       }
@@ -249,7 +293,8 @@ class Recording {
   }
 
   const RecorderOptions& options_;
-  std::vector<Subscription>& topics_;
+  const std::vector<const TopicType*> types_;  // by topic index
+  const std::shared_ptr<const Clock> clock_ = system_clock();
   std::unique_ptr<RecordingFile> file_;
   std::unique_ptr<CandumpFile> candump_;
   int file_index_ = 0;
@@ -258,6 +303,49 @@ class Recording {
   LastSamples last_samples_;
   Progress progress_;
 };
+
+// Writes the pending samples received up to `up_to`, in reception order, until one fails.
+Status write_pending(Recording& recording, Pending& pending, std::uint64_t up_to) {
+  while (!pending.empty() && pending.begin()->first <= up_to) {
+    auto [topic, sample] = std::move(pending.begin()->second);
+    pending.erase(pending.begin());
+    if (auto written = recording.write(topic, sample); !written) return written;
+  }
+  return {};
+}
+
+// Takes, writes, flushes every flush_period and reports every kReportPeriod until `stop` is set,
+// the duration has passed or a write fails, whose reason it returns. What is still pending then
+// is the caller's.
+Status record_until_stopped(TopicReaders& readers, Recording& recording, Pending& pending,
+                            const RecorderOptions& options, const std::atomic<bool>& stop,
+                            const std::function<void(const Progress&)>& report, SteadyTime start) {
+  const auto clock = system_clock();
+  // Without --duration, the end is the stop flag alone.
+  const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
+  SteadyTime next_flush = start + options.flush_period;
+  SteadyTime next_report = start + kReportPeriod;
+  while (!stop.load()) {
+    SteadyTime now = clock->steady();
+    if (now >= end) break;
+    readers.wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
+    const std::uint64_t taken_at = unix_nanoseconds(clock->wall());
+    readers.take_into(pending, taken_at);
+    if (auto written = write_pending(recording, pending, taken_at - kReorderWindowNs); !written) {
+      return written;
+    }
+    now = clock->steady();
+    if (now >= next_flush) {
+      if (auto flushed = recording.flush(); !flushed) return flushed;
+      next_flush = now + options.flush_period;
+    }
+    if (now >= next_report) {
+      if (report) report(recording.progress(now - start));
+      next_report = now + kReportPeriod;
+    }
+  }
+  return {};
+}
 
 }  // namespace
 
@@ -302,92 +390,31 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
   auto participant = dds::Participant::create(
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
   if (!participant) return participant.error();
+  auto readers = TopicReaders::open(**participant, *selected);
+  if (!readers) return readers.error();
 
-  std::vector<Subscription> topics;
-  eprosima::fastdds::dds::WaitSet wait_set;
-  for (const auto& name : *selected) {
-    const TopicType* type = recording::find_topic(name);
-    auto reader = type->open_reader(**participant);
-    if (!reader) return reader.error();
-    auto& condition = (*reader)->reader()->get_statuscondition();
-    condition.set_enabled_statuses(eprosima::fastdds::dds::StatusMask::data_available());
-    wait_set.attach_condition(condition);
-    topics.push_back({type, std::move(*reader)});
-  }
-
-  Recording recording(options, topics);
+  Recording recording(options, (*readers)->types());
   if (auto started = recording.start(); !started) {
     (void)recording.finish();  // the reason to report is the first one
     return started.error();
   }
   if (on_started) on_started();
 
-  const SteadyTime start = std::chrono::steady_clock::now();
-  // Without --duration, the end is the stop flag alone.
-  const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
-  SteadyTime next_flush = start + options.flush_period;
-  SteadyTime next_report = start + kReportPeriod;
-  // Taken, not yet written: ordered by reception time (then by the order taken).
-  std::multimap<std::uint64_t, std::pair<std::size_t, TakenSample>> pending;
-  std::vector<TakenSample> taken;
-  Status failed;
-  const auto write_pending = [&](std::uint64_t up_to) {
-    while (failed && !pending.empty() && pending.begin()->first <= up_to) {
-      auto [topic, sample] = std::move(pending.begin()->second);
-      pending.erase(pending.begin());
-      failed = recording.write(topic, sample);
-    }
-  };
-  while (failed && !stop.load()) {
-    SteadyTime now = std::chrono::steady_clock::now();
-    if (now >= end) break;
-    const SteadyTime wake = std::min({end, now + kLongestWait, next_flush, next_report});
-    eprosima::fastdds::dds::ConditionSeq active;
-    const auto wait =
-        std::chrono::duration_cast<std::chrono::nanoseconds>(std::max(wake - now, Duration{0}));
-    wait_set.wait(active, eprosima::fastrtps::Duration_t(
-                              static_cast<std::int32_t>(wait.count() / 1'000'000'000),
-                              static_cast<std::uint32_t>(wait.count() % 1'000'000'000)));
-    const std::uint64_t taken_at = now_ns();
-    for (std::size_t i = 0; i < topics.size(); ++i) {
-      taken.clear();
-      topics[i].reader->take(taken);
-      for (auto& sample : taken) {
-        if (sample.received_ns == 0) sample.received_ns = taken_at;
-        pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
-      }
-    }
-    write_pending(taken_at - kReorderWindowNs);
-    now = std::chrono::steady_clock::now();
-    if (failed && now >= next_flush) {
-      failed = recording.flush();
-      next_flush = now + options.flush_period;
-    }
-    if (now >= next_report) {
-      auto& progress = recording.progress();
-      progress.elapsed = now - start;
-      if (report) report(progress);
-      next_report = now + kReportPeriod;
-    }
-  }
+  const auto clock = system_clock();
+  const SteadyTime start = clock->steady();
+  Pending pending;
+  Status recorded =
+      record_until_stopped(**readers, recording, pending, options, stop, report, start);
   // What the readers still hold, then everything taken.
-  for (std::size_t i = 0; i < topics.size(); ++i) {
-    taken.clear();
-    topics[i].reader->take(taken);
-    for (auto& sample : taken) {
-      if (sample.received_ns == 0) sample.received_ns = now_ns();
-      pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
-    }
-  }
-  write_pending(UINT64_MAX);
+  (*readers)->take_into(pending, unix_nanoseconds(clock->wall()));
+  if (recorded) recorded = write_pending(recording, pending, UINT64_MAX);
   // Readers first: nothing arrives while the file is closed.
-  topics.clear();
+  readers->reset();
   participant->reset();
   const Status finished = recording.finish();
-  auto& progress = recording.progress();
-  progress.elapsed = std::chrono::steady_clock::now() - start;
+  const Progress& progress = recording.progress(clock->steady() - start);
   if (report) report(progress);
-  if (!failed) return failed.error();
+  if (!recorded) return recorded.error();
   if (!finished) return finished.error();
   return progress;
 }

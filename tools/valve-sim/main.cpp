@@ -49,6 +49,10 @@ int usage_error(const std::string& message) {
   return kExitUsage;
 }
 
+teejet::Error usage(std::string reason) {
+  return {teejet::ErrorCode::kInvalidValue, std::move(reason)};
+}
+
 std::shared_ptr<spdlog::logger> make_logger() {
   auto logger = spdlog::stderr_color_mt("valve-sim");
   logger->set_pattern("[%Y-%m-%d %H:%M:%S.%e] [%^%l%$] %v");
@@ -88,13 +92,8 @@ void add_valve(sim::Simulator& simulator, const sim::Setup& setup,
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{kDescription, "valve-sim"};
-  app.footer(kFooter);
-  app.set_version_flag("--version", "valve-sim " TEEJET_VERSION);
-
+// The options as given; main() reads only those the user named (app.count()).
+struct Arguments {
   std::string can_spec;
   unsigned valve_count = 0;
   std::vector<std::string> serial_texts;
@@ -106,125 +105,151 @@ int main(int argc, char** argv) {
   std::string config_path;
   std::vector<std::string> error_specs;
   bool verbose = false;
+};
 
-  app.add_option("--can", can_spec,
+void add_options(CLI::App& app, Arguments& arguments) {
+  app.add_option("--can", arguments.can_spec,
                  "SocketCAN interface (can0, vcan0); \"virtual:NAME\" is an in-process bus, "
                  "useful only when embedded")
       ->required()
       ->type_name("IFACE");
-  auto* valves_option =
-      app.add_option("--valves", valve_count, "simulate N valves, serials TJV000001..TJV00000N")
-          ->type_name("N");
+  auto* valves_option = app.add_option("--valves", arguments.valve_count,
+                                       "simulate N valves, serials TJV000001..TJV00000N")
+                            ->type_name("N");
   auto* serials_option =
-      app.add_option("--serials", serial_texts,
+      app.add_option("--serials", arguments.serial_texts,
                      "simulate these valves: comma-separated serials, TJV123456 or 123456")
           ->delimiter(',')
           ->type_name("LIST");
   valves_option->excludes(serials_option);
-  auto* dps_option = app.add_option("--dps", dps,
-                                    "degrees per second at 100 % speed, 0 < DPS <= 359 "
-                                    "(default 90)")
-                         ->type_name("DPS");
-  auto* closed_option =
-      app.add_option("--closed", closed, "Closed Degrees (default 0)")->type_name("DEG");
-  auto* opened_option =
-      app.add_option("--opened", opened,
-                     "Opened Degrees: at most 340 for a limited valve, 360 for a full-turn "
-                     "valve (default 90)")
-          ->type_name("DEG");
-  auto* start_option =
-      app.add_option("--start", start, "position at power-up (default: Closed Degrees)")
-          ->type_name("DEG");
-  auto* direction_option =
-      app.add_option("--opening-direction", opening_direction,
-                     "which way the valves turn to open, looking from the top (default "
-                     "clockwise)")
-          ->check(CLI::IsMember({"clockwise", "counterclockwise"}))
-          ->type_name("DIR");
-  app.add_option("--config", config_path,
+  app.add_option("--dps", arguments.dps,
+                 "degrees per second at 100 % speed, 0 < DPS <= 359 "
+                 "(default 90)")
+      ->type_name("DPS");
+  app.add_option("--closed", arguments.closed, "Closed Degrees (default 0)")->type_name("DEG");
+  app.add_option("--opened", arguments.opened,
+                 "Opened Degrees: at most 340 for a limited valve, 360 for a full-turn "
+                 "valve (default 90)")
+      ->type_name("DEG");
+  app.add_option("--start", arguments.start, "position at power-up (default: Closed Degrees)")
+      ->type_name("DEG");
+  app.add_option("--opening-direction", arguments.opening_direction,
+                 "which way the valves turn to open, looking from the top (default "
+                 "clockwise)")
+      ->check(CLI::IsMember({"clockwise", "counterclockwise"}))
+      ->type_name("DIR");
+  app.add_option("--config", arguments.config_path,
                  "YAML file: defaults, per-valve settings, errors to inject, valves to add on "
                  "SIGUSR1 (see docs/valve-sim.md)")
       ->type_name("FILE.yaml");
-  app.add_option("--inject-error", error_specs,
+  app.add_option("--inject-error", arguments.error_specs,
                  "latch an error until Clear Errors, e.g. TJV000001:high-voltage:16.2:15.5; "
                  "kinds high-voltage, low-voltage, high-current, low-current, "
                  "high-temperature, min-dps (which takes :open or :close at the end); "
                  "repeatable")
       ->type_name("SERIAL:KIND:VALUE:LIMIT");
-  app.add_flag("-v,--verbose", verbose, "log every frame received and sent, decoded");
+  app.add_flag("-v,--verbose", arguments.verbose, "log every frame received and sent, decoded");
+}
 
-  command_line::refuse_empty_values(app);
-  if (const auto exit_status = command_line::parse(app, argc, argv, kExitUsage)) {
-    return *exit_status;
-  }
-
+// What the command line asks for; a serial or error that does not parse is an Error saying so.
+teejet::Result<sim::CommandLine> command_line_of(const CLI::App& app, const Arguments& arguments) {
   sim::CommandLine command_line;
-  if (valves_option->count() > 0) command_line.valve_count = valve_count;
-  for (const auto& text : serial_texts) {
+  if (app.count("--valves") > 0) command_line.valve_count = arguments.valve_count;
+  for (const auto& text : arguments.serial_texts) {
     const auto serial = codec::parse_serial(text);
-    if (!serial) return usage_error("--serials: " + serial.error().reason);
+    if (!serial) return usage("--serials: " + serial.error().reason);
     command_line.serials.push_back(*serial);
   }
-  if (serials_option->count() > 0 && command_line.serials.empty()) {
-    return usage_error("--serials: give at least one serial");
+  if (app.count("--serials") > 0 && command_line.serials.empty()) {
+    return usage("--serials: give at least one serial");
   }
   auto& settings = command_line.settings;
-  if (dps_option->count() > 0) settings.degrees_per_second = dps;
-  if (closed_option->count() > 0) settings.closed_degrees = closed;
-  if (opened_option->count() > 0) settings.opened_degrees = opened;
-  if (start_option->count() > 0) settings.start_degrees = start;
-  if (direction_option->count() > 0)
-    settings.opening_direction = sim::parse_rotation(opening_direction);
-  for (const auto& spec : error_specs) {
+  if (app.count("--dps") > 0) settings.degrees_per_second = arguments.dps;
+  if (app.count("--closed") > 0) settings.closed_degrees = arguments.closed;
+  if (app.count("--opened") > 0) settings.opened_degrees = arguments.opened;
+  if (app.count("--start") > 0) settings.start_degrees = arguments.start;
+  if (app.count("--opening-direction") > 0) {
+    settings.opening_direction = sim::parse_rotation(arguments.opening_direction);
+  }
+  for (const auto& spec : arguments.error_specs) {
     const auto parsed = sim::parse_error_spec(spec);
-    if (!parsed) return usage_error("--inject-error " + parsed.error().reason);
+    if (!parsed) return usage("--inject-error " + parsed.error().reason);
     command_line.errors.push_back(*parsed);
   }
+  return command_line;
+}
 
+// The bank to simulate: the command line composed with the --config file.
+teejet::Result<sim::Setup> setup_of(const CLI::App& app, const Arguments& arguments) {
+  auto command_line = command_line_of(app, arguments);
+  if (!command_line) return command_line.error();
   sim::ConfigFile file;
-  if (!config_path.empty()) {
-    auto loaded = sim::load_config(config_path);
-    if (!loaded) return usage_error(loaded.error().reason);
+  if (!arguments.config_path.empty()) {
+    auto loaded = sim::load_config(arguments.config_path);
+    if (!loaded) return loaded.error();
     file = std::move(loaded).value();
   }
-  auto composed = sim::compose_setup(command_line, file);
-  if (!composed) return usage_error(composed.error().reason);
-  const sim::Setup setup = std::move(composed).value();
+  return sim::compose_setup(*command_line, file);
+}
 
-  // Signals are taken synchronously by sigwait() below; the simulator thread inherits the mask.
+// SIGINT, SIGTERM and SIGUSR1 are taken synchronously by serve_signals(); threads started later
+// (the simulator's) inherit the mask.
+sigset_t block_signals() {
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGUSR1);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  return signals;
+}
 
-  const auto logger = make_logger();
-  sim::SimulatorOptions options;
-  options.valves = setup.valves;
-  options.errors = setup.errors;
-  options.verbose = verbose;
-  options.logger = logger;
-  sim::Simulator simulator(teejet::can::make_bus(can_spec, teejet::can::valve_side_filters()),
-                           std::move(options));
-  if (const auto started = simulator.start(); !started) {
-    std::cerr << "valve-sim: " << started.error().reason << '\n';
-    return kExitBus;
-  }
-  logger->info("simulating {} valve(s) on {}; SIGUSR1 adds one, SIGINT/SIGTERM stop",
-               setup.valves.size(), can_spec);
-
+// Adds a valve on every SIGUSR1; returns on SIGINT or SIGTERM.
+void serve_signals(const sigset_t& signals, sim::Simulator& simulator, const sim::Setup& setup,
+                   spdlog::logger& logger) {
   std::deque<sim::ValveConfig> hotplug(setup.hotplug.begin(), setup.hotplug.end());
   for (;;) {
     int received = 0;
     if (sigwait(&signals, &received) != 0) continue;
     if (received == SIGUSR1) {
-      add_valve(simulator, setup, hotplug, *logger);
+      add_valve(simulator, setup, hotplug, logger);
       continue;
     }
-    logger->info("{}: stopping", received == SIGINT ? "SIGINT" : "SIGTERM");
-    break;
+    logger.info("{}: stopping", received == SIGINT ? "SIGINT" : "SIGTERM");
+    return;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{kDescription, "valve-sim"};
+  app.footer(kFooter);
+  app.set_version_flag("--version", "valve-sim " TEEJET_VERSION);
+  Arguments arguments;
+  add_options(app, arguments);
+  command_line::refuse_empty_values(app);
+  if (const auto exit_status = command_line::parse(app, argc, argv, kExitUsage)) {
+    return *exit_status;
+  }
+  const auto setup = setup_of(app, arguments);
+  if (!setup) return usage_error(setup.error().reason);
+
+  const sigset_t signals = block_signals();
+  const auto logger = make_logger();
+  sim::Simulator simulator(
+      teejet::can::make_bus(arguments.can_spec, teejet::can::valve_side_filters()),
+      {.valves = setup->valves,
+       .errors = setup->errors,
+       .verbose = arguments.verbose,
+       .logger = logger});
+  if (const auto started = simulator.start(); !started) {
+    std::cerr << "valve-sim: " << started.error().reason << '\n';
+    return kExitBus;
+  }
+  logger->info("simulating {} valve(s) on {}; SIGUSR1 adds one, SIGINT/SIGTERM stop",
+               setup->valves.size(), arguments.can_spec);
+  serve_signals(signals, simulator, *setup, *logger);
   simulator.stop();
   logger->info("sent {} frames, handled {}", simulator.frames_sent(), simulator.frames_handled());
   return 0;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 
 #include "command_rate_limiter.hpp"
 #include "command_tracker.hpp"
@@ -263,70 +264,112 @@ void Bridge::publish_presence(const directory::ValveRecord& valve) {
 
 // ---- Commands -----------------------------------------------------------------------------
 
+// A command on its way to the bus: what the checks of on_command() learn, one after the other.
+struct Bridge::CommandUnderCheck {
+  const ValveCommand& command;
+  std::optional<directory::ValveRecord> valve;
+  std::optional<codec::ToValveMessage> message;  // from translate()
+  std::optional<codec::CanFrame> frame;          // from encode_frame()
+};
+
 void Bridge::on_command(const ValveCommand& command, const std::string& commander) {
   std::lock_guard lock(mutex_);
   // Stamped before it is sent: a reply can arrive before this function returns, and a client
   // tells a fresh reply from an old one by comparing it with the ACCEPTED stamp.
   const Timestamp taken = clock_->wall();
-  const auto valve = directory_.find(command.serial());
-  const auto reject = [&](const std::string& reason) {
-    ++counters_.commands_rejected;
-    publish_status(command, COMMAND_REJECTED, reason, taken);
+  CommandUnderCheck check{command, directory_.find(command.serial())};
+  if (!check.valve && !config_.reject_unknown_serials) {
+    ++counters_.commands_ignored;  // another gateway may own it
+    return;
+  }
+  // In this order; the first reason ends the command REJECTED. Stop passes the boot-code check
+  // and has a rate bucket of its own, so that a stop is never refused when it can be sent.
+  static constexpr std::array kChecks{
+      &Bridge::refuse_unknown_serial, &Bridge::refuse_offline,   &Bridge::refuse_contested,
+      &Bridge::refuse_baud_change,    &Bridge::translate,        &Bridge::refuse_in_boot_code,
+      &Bridge::encode_frame,          &Bridge::refuse_over_rate, &Bridge::send_frame,
   };
-  if (!valve) {
-    if (config_.reject_unknown_serials) {
-      reject("no valve " + codec::format_serial(command.serial()) + " on this gateway's bus (" +
-             config_.can_interface + ")");
+  for (const auto refusal_of : kChecks) {
+    if (const auto reason = (this->*refusal_of)(check)) {
+      ++counters_.commands_rejected;
+      publish_status(command, COMMAND_REJECTED, *reason, taken);
       return;
     }
-    ++counters_.commands_ignored;
-    return;
   }
-  if (!valve->online) {
-    reject(unreachable_reason(*valve));
-    return;
+  follow_sent(check, commander, taken);
+}
+
+std::optional<std::string> Bridge::refuse_unknown_serial(CommandUnderCheck& check) {
+  if (check.valve) return std::nullopt;
+  return "no valve " + codec::format_serial(check.command.serial()) + " on this gateway's bus (" +
+         config_.can_interface + ")";
+}
+
+std::optional<std::string> Bridge::refuse_offline(CommandUnderCheck& check) {
+  if (check.valve->online) return std::nullopt;
+  return unreachable_reason(*check.valve);
+}
+
+std::optional<std::string> Bridge::refuse_contested(CommandUnderCheck& check) {
+  // A frame to that address would reach both valves.
+  if (const auto contest = directory_.contest_of(check.command.serial())) {
+    return contest_reason(*contest);
   }
-  if (const auto contest = directory_.contest_of(command.serial())) {
-    reject(contest_reason(*contest));  // a frame to that address would reach both valves
-    return;
+  return std::nullopt;
+}
+
+std::optional<std::string> Bridge::refuse_baud_change(CommandUnderCheck& check) {
+  if (check.command.kind() != COMMAND_SET_BAUD_RATE || config_.allow_baud_change) {
+    return std::nullopt;
   }
-  if (command.kind() == COMMAND_SET_BAUD_RATE && !config_.allow_baud_change) {
-    reject("setting the baud rate is not allowed; start the gateway with --allow-baud-change");
-    return;
+  return "setting the baud rate is not allowed; start the gateway with --allow-baud-change";
+}
+
+std::optional<std::string> Bridge::translate(CommandUnderCheck& check) {
+  auto message = dds::to_message(check.command);
+  if (!message) return message.error().reason;
+  check.message = std::move(*message);
+  return std::nullopt;
+}
+
+std::optional<std::string> Bridge::refuse_in_boot_code(CommandUnderCheck& check) {
+  if (!check.valve->boot_mode || runs_in_boot_code(*check.message)) return std::nullopt;
+  return boot_code_reason(check.command.serial());
+}
+
+std::optional<std::string> Bridge::encode_frame(CommandUnderCheck& check) {
+  const auto frame = codec::encode(check.valve->address, *check.message);
+  if (!frame) return frame.error().reason;
+  check.frame = *frame;
+  return std::nullopt;
+}
+
+std::optional<std::string> Bridge::refuse_over_rate(CommandUnderCheck& check) {
+  const bool stop = std::holds_alternative<codec::Stop>(*check.message);
+  if (limiter_->admit(check.command.serial(), stop, clock_->steady())) return std::nullopt;
+  ++counters_.commands_rate_limited;
+  return rate_limit_reason(check.command.serial());
+}
+
+std::optional<std::string> Bridge::send_frame(CommandUnderCheck& check) {
+  if (const auto sent = bus_.send(*check.frame); !sent) {
+    return "CAN send failed: " + sent.error().reason;
   }
-  const auto message = dds::to_message(command);
-  if (!message) {
-    reject(message.error().reason);
-    return;
-  }
-  if (valve->boot_mode && !runs_in_boot_code(*message)) {
-    reject(boot_code_reason(command.serial()));
-    return;
-  }
-  const auto frame = codec::encode(valve->address, *message);
-  if (!frame) {
-    reject(frame.error().reason);
-    return;
-  }
-  if (!limiter_->admit(command.serial(), std::holds_alternative<codec::Stop>(*message),
-                       clock_->steady())) {
-    ++counters_.commands_rate_limited;
-    reject(rate_limit_reason(command.serial()));
-    return;
-  }
-  if (const auto sent = bus_.send(*frame); !sent) {
-    reject("CAN send failed: " + sent.error().reason);
-    return;
-  }
+  return std::nullopt;
+}
+
+void Bridge::follow_sent(const CommandUnderCheck& check, const std::string& commander,
+                         Timestamp taken) {
+  const ValveCommand& command = check.command;
   publish_status(command, COMMAND_ACCEPTED, "", taken);
-  if (std::holds_alternative<codec::ClearErrors>(*message)) {
+  if (std::holds_alternative<codec::ClearErrors>(*check.message)) {
     for (const ErrorKind kind : latched_errors_[command.serial()]) {
       sink_.error_cleared(command.serial(), kind);
     }
     latched_errors_.erase(command.serial());
   }
   Outcome outcome;
-  tracker_->sent(command.serial(), *message, command, commander, clock_->steady(), outcome);
+  tracker_->sent(command.serial(), *check.message, command, commander, clock_->steady(), outcome);
   next_deadline_.reset();
   settle(outcome);
 }

@@ -45,7 +45,11 @@ Result<codec::CanFrame> to_can_frame(const teejet::BusFrame& sample) {
   if (sample.dlc() > codec::CanFrame::kMaxData) {
     return invalid("dlc " + std::to_string(sample.dlc()) + " is above 8");
   }
-  if (sample.data().size() != sample.dlc()) {
+  if (sample.remote() && !sample.data().empty()) {
+    return invalid("a remote frame with " + std::to_string(sample.data().size()) +
+                   " data bytes (it carries none)");
+  }
+  if (!sample.remote() && sample.data().size() != sample.dlc()) {
     return invalid("dlc " + std::to_string(sample.dlc()) + " but " +
                    std::to_string(sample.data().size()) + " data bytes");
   }
@@ -61,6 +65,7 @@ Result<codec::CanFrame> to_can_frame(const teejet::BusFrame& sample) {
   codec::CanFrame frame;
   frame.id = sample.id();
   frame.extended = sample.extended();
+  frame.remote = sample.remote();
   frame.dlc = sample.dlc();
   std::copy(sample.data().begin(), sample.data().end(), frame.data.begin());
   return frame;
@@ -74,9 +79,10 @@ teejet::BusFrame from_can_frame(const codec::CanFrame& frame, std::string_view g
   sample.can_interface(std::string(can_interface));
   sample.id(frame.id);
   sample.extended(frame.extended);
-  const auto payload = frame.payload().first(std::min<std::size_t>(frame.dlc, frame.kMaxData));
-  sample.dlc(static_cast<std::uint8_t>(payload.size()));
-  sample.data(std::vector<std::uint8_t>(payload.begin(), payload.end()));
+  sample.remote(frame.remote);
+  const auto dlc = std::min<std::size_t>(frame.dlc, codec::CanFrame::kMaxData);
+  sample.dlc(static_cast<std::uint8_t>(dlc));
+  if (!frame.remote) sample.data().assign(frame.data.begin(), frame.data.begin() + dlc);
   sample.direction(direction);
   sample.stamp_ns(stamp_ns);
   return sample;

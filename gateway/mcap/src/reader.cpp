@@ -7,6 +7,7 @@
 
 #include "bytes.hpp"
 #include "compression.hpp"
+#include "layouts.hpp"
 
 namespace teejet::mcap {
 
@@ -25,9 +26,6 @@ std::string opcode_name(std::uint8_t opcode) {
 
 namespace {
 
-constexpr std::size_t kMagicSize = sizeof kMagic;
-constexpr std::size_t kFooterRecordSize = 1 + 8 + 8 + 8 + 4;
-
 Error damaged(std::uint64_t offset, const std::string& what) {
   return Error{ErrorCode::kInvalidValue,
                "damaged MCAP file at byte " + std::to_string(offset) + ": " + what};
@@ -36,28 +34,6 @@ Error damaged(std::uint64_t offset, const std::string& what) {
 bool has_magic(std::span<const std::uint8_t> bytes) {
   return bytes.size() >= kMagicSize &&
          std::equal(bytes.begin(), bytes.begin() + kMagicSize, kMagic);
-}
-
-std::optional<Schema> parse_schema(std::span<const std::uint8_t> content) {
-  ByteReader in(content);
-  Schema schema;
-  const auto id = in.u16();
-  auto name = in.string();
-  auto encoding = in.string();
-  auto data = in.bytes32();
-  if (!id || !name || !encoding || !data) return std::nullopt;
-  return Schema{*id, std::move(*name), std::move(*encoding), std::move(*data)};
-}
-
-std::optional<Channel> parse_channel(std::span<const std::uint8_t> content) {
-  ByteReader in(content);
-  const auto id = in.u16();
-  const auto schema_id = in.u16();
-  auto topic = in.string();
-  auto encoding = in.string();
-  auto metadata = in.string_map();
-  if (!id || !schema_id || !topic || !encoding || !metadata) return std::nullopt;
-  return Channel{*id, *schema_id, std::move(*topic), std::move(*encoding), std::move(*metadata)};
 }
 
 // One pass over a sequence of records (the file's data section, or a chunk's records).
@@ -106,7 +82,7 @@ class RecordWalker {
     switch (static_cast<Opcode>(opcode)) {
       case Opcode::kSchema: {
         auto schema = parse_schema(content);
-        if (!schema) return damaged(at, "a Schema record does not parse");
+        if (!schema) return damaged(at, schema.error().reason);
         if (schema->id == 0) return true;  // the spec: readers ignore it
         const auto [it, added] = contents_.schemas.emplace(schema->id, *schema);
         if (!added && !(it->second == *schema)) {
@@ -117,7 +93,7 @@ class RecordWalker {
       }
       case Opcode::kChannel: {
         auto channel = parse_channel(content);
-        if (!channel) return damaged(at, "a Channel record does not parse");
+        if (!channel) return damaged(at, channel.error().reason);
         if (channel->schema_id != 0 && !contents_.schemas.count(channel->schema_id)) {
           return damaged(at, "channel " + channel->topic + " refers to schema " +
                                  std::to_string(channel->schema_id) + ", which is not defined");
@@ -130,28 +106,15 @@ class RecordWalker {
         return true;
       }
       case Opcode::kMessage: {
-        ByteReader in(content);
-        Message message;
-        const auto channel_id = in.u16();
-        const auto sequence = in.u32();
-        const auto log_time = in.u64();
-        const auto publish_time = in.u64();
-        if (!channel_id || !sequence || !log_time || !publish_time) {
-          return damaged(at, "a Message record is shorter than its fields");
-        }
-        const auto channel = contents_.channels.find(*channel_id);
+        const auto message = parse_message(content);
+        if (!message) return damaged(at, message.error().reason);
+        const auto channel = contents_.channels.find(message->channel_id);
         if (channel == contents_.channels.end()) {
-          return damaged(at, "a message on channel " + std::to_string(*channel_id) +
+          return damaged(at, "a message on channel " + std::to_string(message->channel_id) +
                                  " comes before that channel's record");
         }
-        message.channel_id = *channel_id;
-        message.sequence = *sequence;
-        message.log_time = *log_time;
-        message.publish_time = *publish_time;
-        const auto data = in.take(in.remaining());
-        message.data.assign(data->begin(), data->end());
         ++contents_.messages;
-        if (visit_) visit_(channel->second, message);
+        if (visit_) visit_(channel->second, *message);
         return true;
       }
       case Opcode::kChunk:
@@ -170,22 +133,11 @@ class RecordWalker {
   }
 
   Result<bool> chunk(std::span<const std::uint8_t> content, std::uint64_t at) {
-    ByteReader in(content);
-    const auto start_time = in.u64();
-    const auto end_time = in.u64();
-    const auto uncompressed_size = in.u64();
-    const auto uncompressed_crc = in.u32();
-    const auto compression = in.string();
-    const auto records_size = in.u64();
-    if (!start_time || !end_time || !uncompressed_size || !uncompressed_crc || !compression ||
-        !records_size) {
-      return damaged(at, "a Chunk record does not parse");
-    }
-    const auto records = in.take(*records_size);
-    if (!records) return damaged(at, "a chunk's records are longer than the chunk");
-    auto data = decompress(*compression, *records, *uncompressed_size);
+    const auto chunk = parse_chunk(content);
+    if (!chunk) return damaged(at, chunk.error().reason);
+    auto data = decompress(chunk->compression, chunk->records, chunk->uncompressed_size);
     if (!data) return damaged(at, data.error().reason);
-    if (*uncompressed_crc != 0 && crc32(*data) != *uncompressed_crc) {
+    if (chunk->uncompressed_crc != 0 && crc32(*data) != chunk->uncompressed_crc) {
       return damaged(at, "a chunk's CRC does not match its records");
     }
     ++contents_.chunks;
@@ -203,6 +155,98 @@ Error not_mcap(std::span<const std::uint8_t> file) {
   return Error{ErrorCode::kInvalidValue, file.size() < kMagicSize
                                              ? "not an MCAP file: shorter than its magic bytes"
                                              : "not an MCAP file: wrong magic bytes"};
+}
+
+// Where the Footer starts in a file that ends with one: right before the closing magic.
+std::size_t footer_offset(std::span<const std::uint8_t> file) {
+  return file.size() - kMagicSize - Footer::kRecordSize;
+}
+
+// The Footer of a closed file; nullopt when the file is too short for one or lacks the closing
+// magic (a recorder that stopped early).
+Result<std::optional<Footer>> read_footer(std::span<const std::uint8_t> file) {
+  if (file.size() < 2 * kMagicSize + Footer::kRecordSize || !has_magic(file.last(kMagicSize))) {
+    return std::optional<Footer>{};
+  }
+  const std::size_t at = footer_offset(file);
+  auto footer = parse_footer(file.subspan(at, Footer::kRecordSize));
+  if (!footer) return damaged(at, footer.error().reason);
+  return std::optional<Footer>{*footer};
+}
+
+// The summary's records (not its Summary Offsets), once the footer points inside the file and
+// the summary's CRC matches.
+Result<std::span<const std::uint8_t>> summary_section(std::span<const std::uint8_t> file,
+                                                      const Footer& footer) {
+  const std::size_t footer_at = footer_offset(file);
+  const std::uint64_t start = footer.summary_start;
+  const std::uint64_t offsets = footer.summary_offset_start;
+  if (start > footer_at || (offsets != 0 && (offsets < start || offsets > footer_at))) {
+    return damaged(footer_at, "the footer points outside the file");
+  }
+  const auto covered = file.subspan(start, footer_at + Footer::kBytesBeforeCrc - start);
+  if (footer.summary_crc != 0 && crc32(covered) != footer.summary_crc) {
+    return damaged(start, "the summary's CRC does not match");
+  }
+  const std::size_t end = offsets != 0 ? offsets : footer_at;
+  return file.subspan(start, end - start);
+}
+
+// Adds one record of the summary section, found at byte `at`: schemas, channels, the statistics
+// and chunk indexes; attachment and metadata indexes and later record kinds are skipped.
+Status add_summary_record(Summary& summary, std::uint8_t opcode,
+                          std::span<const std::uint8_t> content, std::uint64_t at,
+                          std::uint64_t file_size) {
+  switch (static_cast<Opcode>(opcode)) {
+    case Opcode::kSchema: {
+      auto schema = parse_schema(content);
+      if (!schema) return damaged(at, schema.error().reason);
+      summary.schemas.emplace(schema->id, std::move(*schema));
+      return {};
+    }
+    case Opcode::kChannel: {
+      auto channel = parse_channel(content);
+      if (!channel) return damaged(at, channel.error().reason);
+      summary.channels.emplace(channel->id, std::move(*channel));
+      return {};
+    }
+    case Opcode::kStatistics: {
+      auto statistics = parse_statistics(content);
+      if (!statistics) return damaged(at, statistics.error().reason);
+      summary.statistics = std::move(*statistics);
+      return {};
+    }
+    case Opcode::kChunkIndex: {
+      auto index = parse_chunk_index(content);
+      if (!index) return damaged(at, index.error().reason);
+      if (index->chunk_start_offset > file_size ||
+          index->chunk_length > file_size - index->chunk_start_offset) {
+        return damaged(at, "a Chunk Index points outside the file");
+      }
+      summary.chunk_indexes.push_back(std::move(*index));
+      return {};
+    }
+    default:
+      return {};
+  }
+}
+
+// The records of `section`, which starts at byte `section_at` of `file`.
+Result<Summary> parse_summary(std::span<const std::uint8_t> file, std::uint64_t section_at,
+                              std::span<const std::uint8_t> section) {
+  ByteReader in(section);
+  Summary summary;
+  while (in.remaining() > 0) {
+    const std::uint64_t at = section_at + in.position();
+    const auto opcode = in.u8();
+    const auto length = in.u64();
+    const auto content = length ? in.take(*length) : std::nullopt;
+    if (!content) return damaged(at, "a summary record is cut short");
+    if (auto added = add_summary_record(summary, *opcode, *content, at, file.size()); !added) {
+      return added.error();
+    }
+  }
+  return summary;
 }
 
 }  // namespace
@@ -225,11 +269,9 @@ Result<Contents> read_messages(std::span<const std::uint8_t> file, const Message
     contents.incomplete = "the file ends inside its Header";
     return contents;
   }
-  ByteReader header_in(*header);
-  auto profile = header_in.string();
-  auto library = header_in.string();
-  if (!profile || !library) return damaged(kMagicSize, "the Header does not parse");
-  contents.header = {std::move(*profile), std::move(*library)};
+  auto parsed_header = parse_header(*header);
+  if (!parsed_header) return damaged(kMagicSize, parsed_header.error().reason);
+  contents.header = std::move(*parsed_header);
 
   const std::size_t data_start = kMagicSize + in.position();
   RecordWalker walker(contents, visit);
@@ -245,7 +287,7 @@ Result<Contents> read_messages(std::span<const std::uint8_t> file, const Message
 
   // Data End found: the file must end with a footer and the magic.
   const std::size_t data_end = data_start + consumed;
-  if (file.size() < data_end + kFooterRecordSize + kMagicSize ||
+  if (file.size() < data_end + Footer::kRecordSize + kMagicSize ||
       !has_magic(file.last(kMagicSize))) {
     contents.incomplete = "the file ends after Data End without its footer";
   }
@@ -254,100 +296,14 @@ Result<Contents> read_messages(std::span<const std::uint8_t> file, const Message
 
 Result<std::optional<Summary>> read_summary(std::span<const std::uint8_t> file) {
   if (!has_magic(file)) return not_mcap(file);
-  if (file.size() < 2 * kMagicSize + kFooterRecordSize || !has_magic(file.last(kMagicSize))) {
-    return std::optional<Summary>{};
-  }
-  const std::size_t footer_at = file.size() - kMagicSize - kFooterRecordSize;
-  ByteReader footer(file.subspan(footer_at, kFooterRecordSize));
-  const auto opcode = footer.u8();
-  const auto length = footer.u64();
-  const auto summary_start = footer.u64();
-  const auto summary_offset_start = footer.u64();
-  const auto summary_crc = footer.u32();
-  if (*opcode != static_cast<std::uint8_t>(Opcode::kFooter) || *length != 20) {
-    return damaged(footer_at, "the record before the closing magic is not a Footer");
-  }
-  if (*summary_start == 0) return std::optional<Summary>{};
-  if (*summary_start > footer_at ||
-      (*summary_offset_start != 0 &&
-       (*summary_offset_start < *summary_start || *summary_offset_start > footer_at))) {
-    return damaged(footer_at, "the footer points outside the file");
-  }
-  const auto summary_bytes =
-      file.subspan(*summary_start, footer_at + 1 + 8 + 8 + 8 - *summary_start);
-  if (*summary_crc != 0 && crc32(summary_bytes) != *summary_crc) {
-    return damaged(*summary_start, "the summary's CRC does not match");
-  }
-  const std::size_t summary_end = *summary_offset_start ? *summary_offset_start : footer_at;
-  ByteReader in(file.subspan(*summary_start, summary_end - *summary_start));
-  Summary summary;
-  while (in.remaining() > 0) {
-    const std::uint64_t at = *summary_start + in.position();
-    const auto record_opcode = in.u8();
-    const auto record_length = in.u64();
-    const auto content = record_length ? in.take(*record_length) : std::nullopt;
-    if (!content) return damaged(at, "a summary record is cut short");
-    ByteReader fields(*content);
-    switch (static_cast<Opcode>(*record_opcode)) {
-      case Opcode::kSchema: {
-        auto schema = parse_schema(*content);
-        if (!schema) return damaged(at, "a Schema record does not parse");
-        summary.schemas.emplace(schema->id, std::move(*schema));
-        break;
-      }
-      case Opcode::kChannel: {
-        auto channel = parse_channel(*content);
-        if (!channel) return damaged(at, "a Channel record does not parse");
-        summary.channels.emplace(channel->id, std::move(*channel));
-        break;
-      }
-      case Opcode::kStatistics: {
-        Statistics& s = summary.statistics;
-        const auto messages = fields.u64();
-        const auto schemas = fields.u16();
-        const auto channels = fields.u32();
-        const auto attachments = fields.u32();
-        const auto metadata = fields.u32();
-        const auto chunks = fields.u32();
-        const auto start = fields.u64();
-        const auto end = fields.u64();
-        auto counts = fields.u16_u64_map();
-        if (!messages || !schemas || !channels || !attachments || !metadata || !chunks || !start ||
-            !end || !counts) {
-          return damaged(at, "the Statistics record does not parse");
-        }
-        s = {*messages, *schemas, *channels, *attachments,      *metadata,
-             *chunks,   *start,   *end,      std::move(*counts)};
-        break;
-      }
-      case Opcode::kChunkIndex: {
-        ChunkIndex index;
-        const auto start = fields.u64();
-        const auto end = fields.u64();
-        const auto offset = fields.u64();
-        const auto chunk_length = fields.u64();
-        auto offsets = fields.u16_u64_map();
-        const auto index_length = fields.u64();
-        auto compression = fields.string();
-        const auto compressed = fields.u64();
-        const auto uncompressed = fields.u64();
-        if (!start || !end || !offset || !chunk_length || !offsets || !index_length ||
-            !compression || !compressed || !uncompressed) {
-          return damaged(at, "a Chunk Index record does not parse");
-        }
-        if (*offset > file.size() || *chunk_length > file.size() - *offset) {
-          return damaged(at, "a Chunk Index points outside the file");
-        }
-        summary.chunk_indexes.push_back({*start, *end, *offset, *chunk_length, std::move(*offsets),
-                                         *index_length, std::move(*compression), *compressed,
-                                         *uncompressed});
-        break;
-      }
-      default:
-        break;  // attachment and metadata indexes, later record kinds
-    }
-  }
-  return std::optional<Summary>{std::move(summary)};
+  auto footer = read_footer(file);
+  if (!footer) return footer.error();
+  if (!*footer || (*footer)->summary_start == 0) return std::optional<Summary>{};
+  auto section = summary_section(file, **footer);
+  if (!section) return section.error();
+  auto summary = parse_summary(file, (*footer)->summary_start, *section);
+  if (!summary) return summary.error();
+  return std::optional<Summary>{std::move(*summary)};
 }
 
 Result<Bytes> load_file(const std::string& path) {

@@ -9,6 +9,7 @@
 
 #include "bytes.hpp"
 #include "compression.hpp"
+#include "layouts.hpp"
 
 namespace teejet::mcap {
 namespace {
@@ -35,25 +36,6 @@ class FileSink final : public Sink {
   int fd_;
   std::string path_;
 };
-
-void put_schema(ByteBuilder& out, const Schema& schema) {
-  const auto started = out.begin_record(Opcode::kSchema);
-  out.u16(schema.id);
-  out.string(schema.name);
-  out.string(schema.encoding);
-  out.bytes32(schema.data);
-  out.end_record(started);
-}
-
-void put_channel(ByteBuilder& out, const Channel& channel) {
-  const auto started = out.begin_record(Opcode::kChannel);
-  out.u16(channel.id);
-  out.u16(channel.schema_id);
-  out.string(channel.topic);
-  out.string(channel.message_encoding);
-  out.string_map(channel.metadata);
-  out.end_record(started);
-}
 
 }  // namespace
 
@@ -83,10 +65,7 @@ Result<std::unique_ptr<Writer>> Writer::create(std::unique_ptr<Sink> sink, Write
   std::unique_ptr<Writer> writer(new Writer(std::move(sink), std::move(options)));
   Bytes start(std::begin(kMagic), std::end(kMagic));
   ByteBuilder out(start);
-  const auto header = out.begin_record(Opcode::kHeader);
-  out.string(writer->options_.profile);
-  out.string(writer->options_.library);
-  out.end_record(header);
+  put_header(out, {writer->options_.profile, writer->options_.library});
   if (Status written = writer->emit(start, true); !written) return written.error();
   return writer;
 }
@@ -152,13 +131,7 @@ Status Writer::write(std::uint16_t channel_id, std::uint32_t sequence, std::uint
   }
   chunk_index_[channel_id].emplace_back(log_time, chunk_.size());
   ByteBuilder out(chunk_);
-  const auto started = out.begin_record(Opcode::kMessage);
-  out.u16(channel_id);
-  out.u32(sequence);
-  out.u64(log_time);
-  out.u64(publish_time);
-  out.raw(data);
-  out.end_record(started);
+  put_message(out, channel_id, sequence, log_time, publish_time, data);
 
   if (statistics_.message_count == 0) {
     statistics_.message_start_time = statistics_.message_end_time = log_time;
@@ -192,15 +165,12 @@ Status Writer::close_chunk() {
 
   Bytes record;
   ByteBuilder out(record);
-  const auto started = out.begin_record(Opcode::kChunk);
-  out.u64(chunk_start_time_);
-  out.u64(chunk_end_time_);
-  out.u64(chunk_.size());
-  out.u32(crc32(chunk_));
-  out.string(options_.compression);
-  out.u64(compressed->size());
-  out.raw(*compressed);
-  out.end_record(started);
+  put_chunk(out, {.message_start_time = chunk_start_time_,
+                  .message_end_time = chunk_end_time_,
+                  .uncompressed_size = chunk_.size(),
+                  .uncompressed_crc = crc32(chunk_),
+                  .compression = options_.compression,
+                  .records = *compressed});
   index.chunk_length = record.size();
 
   // The Message Index records follow the chunk; their offsets are known before writing.
@@ -209,14 +179,7 @@ Status Writer::close_chunk() {
   for (const auto& [channel_id, entries] : chunk_index_) {
     index.message_index_offsets[channel_id] = at;
     const std::size_t before = record.size();
-    const auto index_record = out.begin_record(Opcode::kMessageIndex);
-    out.u16(channel_id);
-    out.u32(static_cast<std::uint32_t>(entries.size() * 16));
-    for (const auto& [log_time, offset] : entries) {
-      out.u64(log_time);
-      out.u64(offset);
-    }
-    out.end_record(index_record);
+    put_message_index(out, channel_id, entries);
     at += record.size() - before;
   }
   index.message_index_length = record.size() - indexes_start;
@@ -236,9 +199,7 @@ Status Writer::finish() {
 
   Bytes data_end;
   ByteBuilder end(data_end);
-  const auto data_end_record = end.begin_record(Opcode::kDataEnd);
-  end.u32(data_crc_);
-  end.end_record(data_end_record);
+  put_data_end(end, data_crc_);
   if (Status written = emit(data_end, false); !written) return written;
 
   // The summary: one group per opcode, each found again through a Summary Offset record.
@@ -263,48 +224,13 @@ Status Writer::finish() {
   group(Opcode::kChannel, [&] {
     for (const Channel& channel : channels_) put_channel(out, channel);
   });
-  group(Opcode::kStatistics, [&] {
-    const auto started = out.begin_record(Opcode::kStatistics);
-    out.u64(statistics_.message_count);
-    out.u16(statistics_.schema_count);
-    out.u32(statistics_.channel_count);
-    out.u32(statistics_.attachment_count);
-    out.u32(statistics_.metadata_count);
-    out.u32(statistics_.chunk_count);
-    out.u64(statistics_.message_start_time);
-    out.u64(statistics_.message_end_time);
-    out.u16_u64_map(statistics_.channel_message_counts);
-    out.end_record(started);
-  });
+  group(Opcode::kStatistics, [&] { put_statistics(out, statistics_); });
   group(Opcode::kChunkIndex, [&] {
-    for (const ChunkIndex& index : chunk_indexes_) {
-      const auto started = out.begin_record(Opcode::kChunkIndex);
-      out.u64(index.message_start_time);
-      out.u64(index.message_end_time);
-      out.u64(index.chunk_start_offset);
-      out.u64(index.chunk_length);
-      out.u16_u64_map(index.message_index_offsets);
-      out.u64(index.message_index_length);
-      out.string(index.compression);
-      out.u64(index.compressed_size);
-      out.u64(index.uncompressed_size);
-      out.end_record(started);
-    }
+    for (const ChunkIndex& index : chunk_indexes_) put_chunk_index(out, index);
   });
   const std::uint64_t summary_offset_start = summary_start + summary.size();
-  for (const Group& each : groups) {
-    const auto started = out.begin_record(Opcode::kSummaryOffset);
-    out.u8(static_cast<std::uint8_t>(each.opcode));
-    out.u64(each.start);
-    out.u64(each.length);
-    out.end_record(started);
-  }
-  // The footer's CRC covers the summary, the summary offsets and the footer up to itself.
-  out.u8(static_cast<std::uint8_t>(Opcode::kFooter));
-  out.u64(8 + 8 + 4);
-  out.u64(summary_start);
-  out.u64(summary_offset_start);
-  out.u32(crc32(summary));
+  for (const Group& each : groups) put_summary_offset(out, each.opcode, each.start, each.length);
+  put_footer(summary, summary_start, summary_offset_start);
   summary.insert(summary.end(), std::begin(kMagic), std::end(kMagic));
   return emit(summary, false);
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <exception>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
@@ -156,11 +157,15 @@ class TypedWriter final : public TopicWriter {
     SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
     if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());
     payload.length = static_cast<std::uint32_t>(bytes.size());
-    // fastcdr throws on a payload that ends early; the type support turns that into false.
-    if (bytes.size() < 4 || !type_.deserialize(&payload, &sample)) {
-      return Error{ErrorCode::kInvalidValue, "a " + std::to_string(bytes.size()) +
-                                                 "-byte payload is not a CDR " +
-                                                 std::string(type_.getName())};
+    const Error refused{ErrorCode::kInvalidValue, "a " + std::to_string(bytes.size()) +
+                                                      "-byte payload is not a CDR " +
+                                                      std::string(type_.getName())};
+    // fastcdr throws on a payload that ends early, which the type support turns into false, and
+    // on an unknown encapsulation or a boolean that is not 0 or 1, which it lets through.
+    try {
+      if (bytes.size() < 4 || !type_.deserialize(&payload, &sample)) return refused;
+    } catch (const std::exception&) {
+      return refused;
     }
     return {};
   }

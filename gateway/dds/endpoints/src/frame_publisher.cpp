@@ -2,34 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
 #include <atomic>
-#include <span>
 
+#include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::dds {
 
 namespace fdds = eprosima::fastdds::dds;
-
-BusFrame to_bus_frame(const codec::CanFrame& frame, can::FrameDirection direction, Timestamp stamp,
-                      const std::string& gateway, const std::string& can_interface) {
-  BusFrame sample;
-  sample.gateway(gateway);
-  sample.can_interface(can_interface);
-  sample.id(frame.id);
-  sample.extended(frame.extended);
-  // A remote frame's dlc asks for bytes that it does not carry; no classic frame carries more
-  // than eight, whatever a driver put in dlc.
-  const std::size_t length = frame.remote ? 0 : std::min<std::size_t>(frame.dlc, 8);
-  const std::span<const std::uint8_t> payload(frame.data.data(), length);
-  sample.dlc(frame.dlc);
-  sample.data().assign(payload.begin(), payload.end());
-  sample.direction(direction == can::FrameDirection::kSent ? teejet::FRAME_SENT
-                                                           : teejet::FRAME_RECEIVED);
-  sample.stamp_ns(unix_nanoseconds(stamp));
-  return sample;
-}
 
 Result<std::unique_ptr<FramePublisher>> FramePublisher::create(Participant& participant,
                                                                std::string gateway,
@@ -48,7 +28,10 @@ FramePublisher::FramePublisher(fdds::DataWriter* writer, std::string gateway,
 
 void FramePublisher::on_frame(const codec::CanFrame& frame, can::FrameDirection direction,
                               Timestamp stamp) {
-  auto sample = to_bus_frame(frame, direction, stamp, gateway_, can_interface_);
+  auto sample = bus_frame::from_can_frame(
+      frame, gateway_, can_interface_,
+      direction == can::FrameDirection::kSent ? FRAME_SENT : FRAME_RECEIVED,
+      unix_nanoseconds(stamp));
   const std::uint64_t ns = sample.stamp_ns();
   const eprosima::fastrtps::Time_t source(static_cast<std::int32_t>(ns / 1'000'000'000),
                                           static_cast<std::uint32_t>(ns % 1'000'000'000));

@@ -138,6 +138,22 @@ class Bridge {
                       Timestamp stamp);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
   std::string rate_limit_reason(std::uint32_t serial) const;
+
+  // on_command()'s checks, in its order. Each returns the reason the command is refused, or
+  // nothing; translate() and encode_frame() also keep what they made for the checks after them.
+  struct CommandUnderCheck;
+  std::optional<std::string> refuse_unknown_serial(CommandUnderCheck& check);
+  std::optional<std::string> refuse_offline(CommandUnderCheck& check);
+  std::optional<std::string> refuse_contested(CommandUnderCheck& check);
+  std::optional<std::string> refuse_baud_change(CommandUnderCheck& check);
+  std::optional<std::string> translate(CommandUnderCheck& check);
+  std::optional<std::string> refuse_in_boot_code(CommandUnderCheck& check);
+  std::optional<std::string> encode_frame(CommandUnderCheck& check);
+  std::optional<std::string> refuse_over_rate(CommandUnderCheck& check);  // takes a token
+  std::optional<std::string> send_frame(CommandUnderCheck& check);
+  // A command whose frame went out: ACCEPTED, latched errors cleared, followed by the tracker.
+  void follow_sent(const CommandUnderCheck& check, const std::string& commander, Timestamp taken);
+
   // Publishes what the tracker ended and sends what it asked to restore.
   void settle(const Outcome& outcome);
   // Sends Stop to an online valve and ends its running command; false if not sent.

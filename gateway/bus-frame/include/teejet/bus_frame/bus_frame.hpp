@@ -31,12 +31,15 @@ struct Timestamp {
 Timestamp split_stamp(std::uint64_t stamp_ns);
 
 // The frame of a sample. Refused (ErrorCode::kInvalidValue, the reason names the value): a dlc
-// above 8, a data sequence whose length is not the dlc, an identifier wider than its format
-// (11 or 29 bits), a direction that is neither FRAME_RECEIVED nor FRAME_SENT.
+// above 8, a data frame whose data is not dlc bytes, a remote frame with data, an identifier
+// wider than its format (11 or 29 bits), a direction that is neither FRAME_RECEIVED nor
+// FRAME_SENT.
 Result<codec::CanFrame> to_can_frame(const teejet::BusFrame& sample);
 
-// A sample of `frame` (its first dlc bytes); remote frames have no BusFrame form and are sent as
-// data frames of their dlc.
+// The sample of `frame`, which to_can_frame() turns back into `frame`: a data frame with its
+// first dlc bytes, a remote frame with its dlc and no data. A dlc above 8 (whatever a driver put
+// there) is 8, the most a classic frame carries. Names longer than the IDL's bounds (gateway 64,
+// interface 32) are cut there.
 teejet::BusFrame from_can_frame(const codec::CanFrame& frame, std::string_view gateway,
                                 std::string_view can_interface, teejet::FrameDirection direction,
                                 std::uint64_t stamp_ns);

@@ -2,8 +2,8 @@
 
 // The raw bus on DDS (teejet-gateway --record-frames): every frame the gateway sends or receives
 // as a teejet::BusFrame on topics::kBusFrame, best effort, stamped with the frame's own time.
-// codec::CanFrame (the codec's frame) and teejet::BusFrame (the IDL's) are different types: the
-// conversion below is the only place they meet.
+// codec::CanFrame (the codec's frame) and teejet::BusFrame (the IDL's) meet only in
+// bus_frame::from_can_frame() and to_can_frame(), which the readers of recordings use too.
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <memory>
@@ -11,14 +11,8 @@
 
 #include "teejet/can/observed_bus.hpp"
 #include "teejet/dds/participant.hpp"
-#include "teejet/valve.h"
 
 namespace teejet::dds {
-
-// The sample for one frame. Names longer than the IDL's bounds (gateway 64, interface 32) are
-// cut there, as in every other sample of the gateway.
-BusFrame to_bus_frame(const codec::CanFrame& frame, can::FrameDirection direction, Timestamp stamp,
-                      const std::string& gateway, const std::string& can_interface);
 
 // Thread-safe: the bus reader and the command thread both call on_frame(). The writer belongs
 // to `participant`, which must outlive every on_frame() call.
