@@ -15,6 +15,7 @@
 #include "setup.hpp"
 #include "teejet/can/open_bus.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/codec/table.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/sim/simulator.hpp"
 
@@ -34,7 +35,7 @@ constexpr const char* kDescription =
 constexpr const char* kFooter = R"(Examples:
   valve-sim --can vcan0 --valves 4                   TJV000001..TJV000004 at 0xD8..0xDB
   valve-sim --can vcan0 --serials 123456,TJV123457 --opened 360 --dps 120 -v
-  valve-sim --can vcan0 --valves 2 --inject-error TJV000002:high-voltage:16.2:15.5
+  valve-sim --can vcan0 --valves 2 --inject-error TJV000002:high_voltage:16.2:15.5
 
 Addresses: valves are ranked by serial, lowest first: the lowest takes 0xD8, the next 0xD9, ...
 Signals: SIGINT/SIGTERM stop cleanly (exit 0). SIGUSR1 adds a valve at run time (the next
@@ -142,11 +143,16 @@ void add_options(CLI::App& app, Arguments& arguments) {
                  "YAML file: defaults, per-valve settings, errors to inject, valves to add on "
                  "SIGUSR1 (see docs/valve-sim.md)")
       ->type_name("FILE.yaml");
+  std::string kinds;
+  for (const std::string_view kind : codec::error_kinds()) {
+    if (!kinds.empty()) kinds += ", ";
+    kinds += kind;
+  }
   app.add_option("--inject-error", arguments.error_specs,
-                 "latch an error until Clear Errors, e.g. TJV000001:high-voltage:16.2:15.5; "
-                 "kinds high-voltage, low-voltage, high-current, low-current, "
-                 "high-temperature, min-dps (which takes :open or :close at the end); "
-                 "repeatable")
+                 "latch an error until Clear Errors, e.g. TJV000001:high_voltage:16.2:15.5; "
+                 "kinds (the codec's) " +
+                     kinds +
+                     " (a kind with a direction takes :open or :close at the end); repeatable")
       ->type_name("SERIAL:KIND:VALUE:LIMIT");
   app.add_flag("-v,--verbose", arguments.verbose, "log every frame received and sent, decoded");
 }
