@@ -21,7 +21,7 @@ Overloaded(Fs...) -> Overloaded<Fs...>;
 
 // What each Telemetry value of the IDL asks for. The reply, the sample, the topic and every name
 // follow from the request and the codec's table.
-const std::array<std::pair<Telemetry, codec::ToValveMessage>, 9> kTelemetryRequests{{
+const auto kTelemetryRequests = std::to_array<std::pair<Telemetry, codec::ToValveMessage>>({
     {TELEMETRY_VERSION, codec::RequestVersion{}},
     {TELEMETRY_POSITION, codec::RequestPosition{}},
     {TELEMETRY_TEMPERATURE, codec::RequestTemperature{}},
@@ -31,18 +31,18 @@ const std::array<std::pair<Telemetry, codec::ToValveMessage>, 9> kTelemetryReque
     {TELEMETRY_SPEED_DIRECTION, codec::RequestSpeedDirection{}},
     {TELEMETRY_RUN_TIME, codec::RequestRunTime{}},
     {TELEMETRY_CYCLE_COUNTS, codec::RequestCycleCounts{}},
-}};
+});
 
 // What each ErrorKind of the IDL is on the wire. A ValveError carries the error message's first
 // field as its value, the second as its limit, and its direction if it has one.
-const std::array<std::pair<ErrorKind, codec::FromValveMessage>, 6> kErrorMessages{{
+const auto kErrorMessages = std::to_array<std::pair<ErrorKind, codec::FromValveMessage>>({
     {ERROR_HIGH_VOLTAGE, codec::HighVoltageError{}},
     {ERROR_LOW_VOLTAGE, codec::LowVoltageError{}},
     {ERROR_HIGH_CURRENT, codec::HighCurrentError{}},
     {ERROR_LOW_CURRENT, codec::LowCurrentError{}},
     {ERROR_HIGH_TEMPERATURE, codec::HighTemperatureError{}},
     {ERROR_MIN_DEGREES_PER_SECOND, codec::MinDegreesPerSecondError{}},
-}};
+});
 
 // The message each CommandKind but COMMAND_REQUEST sends (a request's is its telemetry's). A
 // command fills the message's fields of the same name; a baud-rate request sends the one rate
