@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "support/recording_sink.hpp"
+#include "support/valve_commands.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/virtual_bus.hpp"
 
@@ -11,32 +15,15 @@ namespace {
 
 using namespace std::chrono_literals;
 
+using teejet::testing::command;
+using teejet::testing::from;
+using teejet::testing::move_to;
+using teejet::testing::RecordingSink;
+using teejet::testing::request;
+using teejet::testing::stop;
+
 constexpr Timestamp kStart{1'700'000'000s};
-
-struct RecordingSink : Sink {
-  std::vector<ValvePresence> presences;
-  std::vector<dds::TelemetrySample> samples;
-  std::vector<std::pair<std::uint32_t, ErrorKind>> cleared;
-  std::vector<CommandStatus> statuses;
-  std::vector<GatewayStatus> gateway;
-
-  void presence(const ValvePresence& s) override { presences.push_back(s); }
-  void telemetry(const dds::TelemetrySample& s) override { samples.push_back(s); }
-  void error_cleared(std::uint32_t serial, ErrorKind kind) override {
-    cleared.emplace_back(serial, kind);
-  }
-  void command_status(const CommandStatus& s) override { statuses.push_back(s); }
-  void gateway_status(const GatewayStatus& s) override { gateway.push_back(s); }
-
-  std::vector<CommandState> states_of(std::uint32_t command_id) const {
-    std::vector<CommandState> out;
-    for (const auto& s : statuses) {
-      if (s.command_id() == command_id) out.push_back(s.state());
-    }
-    return out;
-  }
-  std::string last_reason() const { return statuses.back().reason().to_string(); }
-};
+constexpr const char* kEcu = "test-ecu";
 
 class BridgeTest : public ::testing::Test {
  protected:
@@ -95,23 +82,6 @@ class BridgeTest : public ::testing::Test {
     return bridge.stop_commanded_by(commander);
   }
 
-  static ValveCommand command(std::uint32_t serial, std::uint32_t id, CommandKind kind) {
-    ValveCommand c;
-    c.serial(serial);
-    c.command_id(id);
-    c.origin("test-ecu");
-    c.kind(kind);
-    c.speed_percent(100);
-    c.direction(DIRECTION_OPEN);
-    return c;
-  }
-
-  static ValveCommand target(std::uint32_t serial, std::uint32_t id, float degrees) {
-    auto c = command(serial, id, COMMAND_TARGET_DEGREES);
-    c.degrees(degrees);
-    return c;
-  }
-
   std::string bus_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
   can::VirtualBus gateway_bus{bus_name, {.filters = can::controller_side_filters()}};
   can::VirtualBus valve_side{bus_name, {.filters = can::valve_side_filters()}};
@@ -123,8 +93,8 @@ TEST_F(BridgeTest, IAmHerePublishesPresenceAndArmsThePollSchedule) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 123456, kStart);
 
-  ASSERT_EQ(sink.presences.size(), 1u);
-  const auto& presence = sink.presences[0];
+  ASSERT_EQ(sink.presences().size(), 1u);
+  const auto presence = sink.presences().at(0);
   EXPECT_EQ(presence.serial(), 123456u);
   EXPECT_EQ(presence.address(), 0xD8);
   EXPECT_TRUE(presence.online());
@@ -150,16 +120,16 @@ TEST_F(BridgeTest, HeartbeatsRefreshPresenceWithoutPollingAgain) {
   (void)sent();
   announce(bridge, 0xD8, 1, kStart + 1s);
   EXPECT_TRUE(sent().empty());
-  ASSERT_EQ(sink.presences.size(), 2u);
-  EXPECT_EQ(sink.presences[1].last_seen_ns(), unix_nanoseconds(kStart + 1s));
+  ASSERT_EQ(sink.presences().size(), 2u);
+  EXPECT_EQ(sink.presences()[1].last_seen_ns(), unix_nanoseconds(kStart + 1s));
 }
 
 TEST_F(BridgeTest, TelemetryIsPublishedForTheSerialStampedWithReceiveTime) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD9, 4711, kStart);
   deliver(bridge, from_valve(0xD9, codec::Position{123.4}, kStart + 5ms));
-  ASSERT_EQ(sink.samples.size(), 1u);
-  const auto& position = std::get<ValvePosition>(sink.samples[0]);
+  ASSERT_EQ(sink.samples().size(), 1u);
+  const auto position = std::get<ValvePosition>(sink.samples().at(0));
   EXPECT_EQ(position.serial(), 4711u);
   EXPECT_FLOAT_EQ(position.degrees(), 123.4f);
   EXPECT_EQ(position.received_ns(), unix_nanoseconds(kStart + 5ms));
@@ -168,7 +138,7 @@ TEST_F(BridgeTest, TelemetryIsPublishedForTheSerialStampedWithReceiveTime) {
 TEST_F(BridgeTest, TelemetryFromAnUnannouncedAddressIsCountedNotGuessed) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   deliver(bridge, from_valve(0xE0, codec::Position{10.0}, kStart));
-  EXPECT_TRUE(sink.samples.empty());
+  EXPECT_TRUE(sink.samples().empty());
   EXPECT_EQ(bridge.counters().unattributed, 1u);
 }
 
@@ -180,9 +150,9 @@ TEST_F(BridgeTest, MalformedFramesAreCountedAndReportedInGatewayStatus) {
   EXPECT_EQ(bridge.counters().last_decode_error, "position needs 3 bytes, got 2");
   tick_at(bridge, kStart);
   tick_at(bridge, kStart + 1s);
-  ASSERT_EQ(sink.gateway.size(), 1u);
-  EXPECT_EQ(sink.gateway[0].decode_errors(), 1u);
-  EXPECT_EQ(sink.gateway[0].gateway().to_string(), "gw-test");
+  ASSERT_EQ(sink.gateway_statuses().size(), 1u);
+  EXPECT_EQ(sink.gateway_statuses()[0].decode_errors(), 1u);
+  EXPECT_EQ(sink.gateway_statuses()[0].gateway().to_string(), "gw-test");
 }
 
 TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
@@ -190,15 +160,15 @@ TEST_F(BridgeTest, AReaddressedValveKeepsItsIdentityAndCommandsFollowIt) {
   announce(bridge, 0xD8, 500, kStart);
   (void)sent();
   announce(bridge, 0xDA, 500, kStart + 1s);  // a valve with a lower serial joined
-  EXPECT_EQ(sink.presences.back().address(), 0xDA);
+  EXPECT_EQ(sink.presences().back().address(), 0xDA);
   const auto repoll = sent();
   ASSERT_EQ(repoll.size(), 9u);
   EXPECT_EQ(repoll[0].id, 0x18EFDAD5u);
 
   deliver(bridge, from_valve(0xDA, codec::Position{45.0}, kStart + 1100ms));
-  EXPECT_EQ(std::get<ValvePosition>(sink.samples.back()).serial(), 500u);
+  EXPECT_EQ(std::get<ValvePosition>(sink.samples().back()).serial(), 500u);
 
-  command_at(bridge, kStart + 2s, command(500, 1, COMMAND_STOP));
+  command_at(bridge, kStart + 2s, from(kEcu, 1, stop(500)));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].id, 0x18EFDAD5u);
@@ -209,26 +179,26 @@ TEST_F(BridgeTest, OfflineAfterThreeSecondsWithoutIAmHere) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 9, kStart);
   tick_at(bridge, kStart + 3s);
-  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_TRUE(sink.presences().back().online());
   tick_at(bridge, kStart + 3s + 1ms);
-  EXPECT_FALSE(sink.presences.back().online());
-  EXPECT_EQ(sink.presences.back().serial(), 9u);
+  EXPECT_FALSE(sink.presences().back().online());
+  EXPECT_EQ(sink.presences().back().serial(), 9u);
 
   (void)sent();
-  command_at(bridge, kStart + 4s, command(9, 7, COMMAND_STOP));
+  command_at(bridge, kStart + 4s, from(kEcu, 7, stop(9)));
   EXPECT_EQ(sink.states_of(7), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "valve TJV000009 is offline");
   EXPECT_TRUE(sent().empty());
 
   announce(bridge, 0xD8, 9, kStart + 5s);
-  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_TRUE(sink.presences().back().online());
   EXPECT_EQ(sent().size(), 9u);  // polling re-armed
 }
 
 TEST_F(BridgeTest, CommandsForSerialsThisGatewayDoesNotHaveAreIgnoredSilently) {
   Bridge bridge(config(), gateway_bus, sink, clock);
-  command_at(bridge, kStart, command(999, 1, COMMAND_STOP));
-  EXPECT_TRUE(sink.statuses.empty());
+  command_at(bridge, kStart, from(kEcu, 1, stop(999)));
+  EXPECT_TRUE(sink.statuses().empty());
   EXPECT_TRUE(sent().empty());
   EXPECT_EQ(bridge.counters().commands_ignored, 1u);
   EXPECT_FALSE(bridge.owns(999));
@@ -238,14 +208,14 @@ TEST_F(BridgeTest, OutOfRangeCommandIsRejectedWithReasonAndNeverReachesTheBus) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
-  command_at(bridge, kStart, target(1, 3, 360.0f));
+  command_at(bridge, kStart, from(kEcu, 3, move_to(1, 360.0f)));
   EXPECT_EQ(sink.states_of(3), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "target_degrees: degrees 360 is outside 0 to 359.9");
-  auto fast = command(1, 4, COMMAND_MANUAL);
+  auto fast = from(kEcu, 4, command(1, COMMAND_MANUAL));
   fast.speed_percent(101);
   command_at(bridge, kStart, fast);
   EXPECT_EQ(sink.last_reason(), "manual: speed_percent 101 is outside 0 to 100");
-  auto shortest = command(1, 5, COMMAND_DEGREES_FROM_POSITION);
+  auto shortest = from(kEcu, 5, command(1, COMMAND_DEGREES_FROM_POSITION));
   shortest.direction(DIRECTION_SHORTEST);
   command_at(bridge, kStart, shortest);
   EXPECT_EQ(sink.last_reason(),
@@ -260,7 +230,7 @@ TEST_F(BridgeTest, TargetMoveIsSentThenCompletedFromPositionTelemetry) {
   deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
   (void)sent();
 
-  command_at(bridge, kStart + 10ms, target(1, 10, 90.0f));
+  command_at(bridge, kStart + 10ms, from(kEcu, 10, move_to(1, 90.0f)));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
   const std::array<std::uint8_t, 8> expected{0x02, 100, 0x01, 0x03, 0x84, 0xFF, 0xFF, 0xFF};
@@ -271,7 +241,7 @@ TEST_F(BridgeTest, TargetMoveIsSentThenCompletedFromPositionTelemetry) {
   EXPECT_EQ(sink.states_of(10), std::vector{COMMAND_ACCEPTED});
   deliver(bridge, from_valve(0xD8, codec::Position{89.5}, kStart + 1000ms));  // within 1.0
   EXPECT_EQ(sink.states_of(10), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
-  EXPECT_EQ(sink.statuses.back().stamp_ns(), unix_nanoseconds(kStart + 1s));
+  EXPECT_EQ(sink.statuses().back().stamp_ns(), unix_nanoseconds(kStart + 1s));
 }
 
 TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
@@ -279,7 +249,8 @@ TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
   deliver(bridge, from_valve(0xD8, codec::DegreesPerSecond{90, codec::Direction::kOpen}, kStart));
-  command_at(bridge, kStart, target(1, 11, 90.0f));  // ETA 1 s at 90 dps, plus a 3 s margin
+  command_at(bridge, kStart,
+             from(kEcu, 11, move_to(1, 90.0f)));  // ETA 1 s at 90 dps, plus a 3 s margin
   deliver(bridge, from_valve(0xD8, codec::Position{30.0}, kStart + 1s));
   announce(bridge, 0xD8, 1, kStart + 2s);
   announce(bridge, 0xD8, 1, kStart + 3s);
@@ -288,7 +259,7 @@ TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {
   tick_at(bridge, kStart + 4s);
   EXPECT_EQ(sink.states_of(11), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
   EXPECT_EQ(sink.states_of(11).size(), 2u);
-  const auto& last = sink.statuses.back();
+  const auto last = sink.statuses().back();
   EXPECT_EQ(last.reason().to_string(), "position 30.0 did not reach 90.0 in time");
 }
 
@@ -296,11 +267,12 @@ TEST_F(BridgeTest, ANewCommandSupersedesTheRunningOne) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
-  command_at(bridge, kStart, target(1, 20, 90.0f));
-  command_at(bridge, kStart + 100ms, target(1, 21, 10.0f));
+  command_at(bridge, kStart, from(kEcu, 20, move_to(1, 90.0f)));
+  command_at(bridge, kStart + 100ms, from(kEcu, 21, move_to(1, 10.0f)));
   EXPECT_EQ(sink.states_of(20), (std::vector{COMMAND_ACCEPTED, COMMAND_SUPERSEDED}));
   EXPECT_EQ(sink.states_of(21), std::vector{COMMAND_ACCEPTED});
-  const auto superseded = std::find_if(sink.statuses.begin(), sink.statuses.end(),
+  const auto statuses = sink.statuses();
+  const auto superseded = std::find_if(statuses.begin(), statuses.end(),
                                        [](auto& s) { return s.state() == COMMAND_SUPERSEDED; });
   EXPECT_EQ(superseded->reason().to_string(), "replaced by command 21 from test-ecu");
 }
@@ -311,7 +283,7 @@ TEST_F(BridgeTest, DegreesFromPositionCompletesAtTheRelativeTarget) {
   Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{80.0}, kStart));
-  auto relative = command(1, 30, COMMAND_DEGREES_FROM_POSITION);
+  auto relative = from(kEcu, 30, command(1, COMMAND_DEGREES_FROM_POSITION));
   relative.degrees(45.0f);  // 125 clamps to the opened limit, 90
   command_at(bridge, kStart, relative);
   deliver(bridge, from_valve(0xD8, codec::Position{90.0}, kStart + 200ms));
@@ -324,7 +296,7 @@ TEST_F(BridgeTest, FullTurnValveWrapsRelativeTargets) {
   Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{350.0}, kStart));
-  auto relative = command(1, 31, COMMAND_DEGREES_FROM_POSITION);
+  auto relative = from(kEcu, 31, command(1, COMMAND_DEGREES_FROM_POSITION));
   relative.degrees(20.0f);  // 370 wraps to 10
   command_at(bridge, kStart, relative);
   deliver(bridge, from_valve(0xD8, codec::Position{9.6}, kStart + 300ms));
@@ -334,7 +306,7 @@ TEST_F(BridgeTest, FullTurnValveWrapsRelativeTargets) {
 TEST_F(BridgeTest, MillisecondsToRunCompletesWhenItsTimeIsUp) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  auto jog = command(1, 40, COMMAND_MILLISECONDS_TO_RUN);
+  auto jog = from(kEcu, 40, command(1, COMMAND_MILLISECONDS_TO_RUN));
   jog.milliseconds(1500);
   command_at(bridge, kStart, jog);
   tick_at(bridge, kStart + 1499ms);
@@ -346,7 +318,7 @@ TEST_F(BridgeTest, MillisecondsToRunCompletesWhenItsTimeIsUp) {
 TEST_F(BridgeTest, StopAndClearErrorsCompleteOnceSent) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  command_at(bridge, kStart, command(1, 50, COMMAND_STOP));
+  command_at(bridge, kStart, from(kEcu, 50, stop(1)));
   EXPECT_EQ(sink.states_of(50), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 }
 
@@ -355,33 +327,29 @@ TEST_F(BridgeTest, ErrorsAreLatchedUntilClearErrors) {
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::HighVoltageError{17.2, 16.5}, kStart));
   deliver(bridge, from_valve(0xD8, codec::HighTemperatureError{90, 85}, kStart));
-  const auto& error = std::get<ValveError>(sink.samples.at(0));
+  const auto error = std::get<ValveError>(sink.samples().at(0));
   EXPECT_EQ(error.kind(), ERROR_HIGH_VOLTAGE);
   EXPECT_FLOAT_EQ(error.value(), 17.2f);
-  EXPECT_TRUE(sink.cleared.empty());
+  EXPECT_TRUE(sink.cleared().empty());
 
   (void)sent();
-  command_at(bridge, kStart + 1s, command(1, 60, COMMAND_CLEAR_ERRORS));
+  command_at(bridge, kStart + 1s, from(kEcu, 60, command(1, COMMAND_CLEAR_ERRORS)));
   EXPECT_EQ(sent().at(0).data[0], 0x04);
   const std::vector<std::pair<std::uint32_t, ErrorKind>> cleared{{1, ERROR_HIGH_VOLTAGE},
                                                                  {1, ERROR_HIGH_TEMPERATURE}};
-  EXPECT_EQ(sink.cleared, cleared);
+  EXPECT_EQ(sink.cleared(), cleared);
 }
 
 TEST_F(BridgeTest, RequestCompletesWhenTheReplyArrivesOrTimesOut) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
-  auto version = command(1, 70, COMMAND_REQUEST);
-  version.telemetry(TELEMETRY_VERSION);
-  command_at(bridge, kStart, version);
+  command_at(bridge, kStart, from(kEcu, 70, request(1, TELEMETRY_VERSION)));
   EXPECT_EQ(sent().at(0).data[0], 0x10);
   deliver(bridge, from_valve(0xD8, codec::VersionInfo{{1, 2, 'e'}, {1, 0, 0}}, kStart + 20ms));
   EXPECT_EQ(sink.states_of(70), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
 
-  auto voltage = command(1, 71, COMMAND_REQUEST);
-  voltage.telemetry(TELEMETRY_VOLTAGE);
-  command_at(bridge, kStart + 1s, voltage);
+  command_at(bridge, kStart + 1s, from(kEcu, 71, request(1, TELEMETRY_VOLTAGE)));
   tick_at(bridge, kStart + 3s);
   EXPECT_EQ(sink.states_of(71), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
   EXPECT_EQ(sink.last_reason(), "no reply within 2000 ms");
@@ -393,9 +361,7 @@ TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
-  auto once = command(1, 75, COMMAND_REQUEST);
-  once.telemetry(TELEMETRY_POSITION);
-  command_at(bridge, kStart, once);
+  command_at(bridge, kStart, from(kEcu, 75, request(1, TELEMETRY_POSITION)));
   EXPECT_EQ(sent().at(0).data[1], 0);  // the client's request, as asked
   deliver(bridge, from_valve(0xD8, codec::Position{12.0}, kStart + 10ms));
   EXPECT_EQ(sink.states_of(75), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
@@ -404,10 +370,8 @@ TEST_F(BridgeTest, AOneShotRequestDoesNotEndTheGatewaysPolling) {
   EXPECT_EQ(restored[0].data[0], 0x11);
   EXPECT_EQ(restored[0].data[1], 1);  // the schedule's 100 ms again
 
-  auto slower = command(1, 76, COMMAND_REQUEST);
-  slower.telemetry(TELEMETRY_POSITION);
-  slower.resend_tenths(50);  // an explicit new period is the client's choice and stands
-  command_at(bridge, kStart + 1s, slower);
+  // An explicit new period is the client's choice and stands.
+  command_at(bridge, kStart + 1s, from(kEcu, 76, request(1, TELEMETRY_POSITION, 50)));
   deliver(bridge, from_valve(0xD8, codec::Position{12.0}, kStart + 1010ms));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
@@ -419,14 +383,15 @@ TEST_F(BridgeTest, BaudRateChangeIsRefusedUnlessAllowed) {
     Bridge bridge(config(), gateway_bus, sink, clock);
     announce(bridge, 0xD8, 1, kStart);
     (void)sent();
-    auto baud = command(1, 80, COMMAND_SET_BAUD_RATE);
+    auto baud = from(kEcu, 80, command(1, COMMAND_SET_BAUD_RATE));
     baud.bit_rate(500000);
     command_at(bridge, kStart, baud);
     EXPECT_EQ(sink.states_of(80), std::vector{COMMAND_REJECTED});
     EXPECT_EQ(sink.last_reason(),
               "setting the baud rate is not allowed; start the gateway with --allow-baud-change");
     EXPECT_TRUE(sent().empty());
-    command_at(bridge, kStart, command(1, 81, COMMAND_REQUEST_BAUD_RATE));  // asking is fine
+    command_at(bridge, kStart,
+               from(kEcu, 81, command(1, COMMAND_REQUEST_BAUD_RATE)));  // asking is fine
     EXPECT_EQ(sent().at(0).data[1], 0x55);
   }
   auto c = config();
@@ -434,7 +399,7 @@ TEST_F(BridgeTest, BaudRateChangeIsRefusedUnlessAllowed) {
   Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   (void)sent();
-  auto baud = command(1, 82, COMMAND_SET_BAUD_RATE);
+  auto baud = from(kEcu, 82, command(1, COMMAND_SET_BAUD_RATE));
   baud.bit_rate(500000);
   command_at(bridge, kStart, baud);
   const auto frames = sent();
@@ -450,7 +415,7 @@ TEST_F(BridgeTest, SendFailureRejectsTheCommandVisibly) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   can::VirtualBus::set_link_up(bus_name, false);
-  command_at(bridge, kStart, command(1, 90, COMMAND_STOP));
+  command_at(bridge, kStart, from(kEcu, 90, stop(1)));
   EXPECT_EQ(sink.states_of(90), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(), "CAN send failed: " + bus_name + ": link is down");
   can::VirtualBus::set_link_up(bus_name, true);
@@ -475,11 +440,10 @@ TEST_F(BridgeTest, AtShutdownEveryCommandStillFollowedEndsSayingTheGatewayStoppe
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   announce(bridge, 0xD9, 2, kStart);
-  command_at(bridge, kStart, target(1, 80, 90.0f));  // a move the valve is left to finish
-  auto request = command(2, 81, COMMAND_REQUEST);
-  request.telemetry(TELEMETRY_VOLTAGE);
-  command_at(bridge, kStart, request);                       // awaiting its reply
-  command_at(bridge, kStart, command(2, 82, COMMAND_STOP));  // over already
+  command_at(bridge, kStart,
+             from(kEcu, 80, move_to(1, 90.0f)));  // a move the valve is left to finish
+  command_at(bridge, kStart, from(kEcu, 81, request(2, TELEMETRY_VOLTAGE)));  // awaiting its reply
+  command_at(bridge, kStart, from(kEcu, 82, stop(2)));                        // over already
   (void)sent();
   EXPECT_EQ(bridge.end_all_commands(), 2u);
   EXPECT_EQ(sink.states_of(80), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
@@ -494,8 +458,8 @@ TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   announce(bridge, 0xD9, 2, kStart);
-  command_at(bridge, kStart, command(1, 100, COMMAND_MANUAL), "writer-a");
-  command_at(bridge, kStart, command(2, 101, COMMAND_MANUAL), "writer-b");
+  command_at(bridge, kStart, from(kEcu, 100, command(1, COMMAND_MANUAL)), "writer-a");
+  command_at(bridge, kStart, from(kEcu, 101, command(2, COMMAND_MANUAL)), "writer-b");
   (void)sent();
   EXPECT_EQ(stop_commanded_by_at(bridge, kStart + 1s, "writer-a"), 1u);
   const auto frames = sent();
@@ -508,19 +472,19 @@ TEST_F(BridgeTest, FailSafeStopsOnlyTheLostCommandersValves) {
 TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   tick_at(bridge, kStart);
-  EXPECT_TRUE(sink.gateway.empty());  // no valve could have announced itself yet
+  EXPECT_TRUE(sink.gateway_statuses().empty());  // no valve could have announced itself yet
   announce(bridge, 0xD8, 1, kStart + 300ms);
   tick_at(bridge, kStart + 999ms);
-  EXPECT_TRUE(sink.gateway.empty());
+  EXPECT_TRUE(sink.gateway_statuses().empty());
   tick_at(bridge, kStart + 1s);
   tick_at(bridge, kStart + 1500ms);
   tick_at(bridge, kStart + 2s);
-  ASSERT_EQ(sink.gateway.size(), 2u);
-  EXPECT_EQ(sink.gateway[0].valves_online(), 1u);
-  EXPECT_EQ(sink.gateway[0].valves_known(), 1u);
-  EXPECT_EQ(sink.gateway[0].frames_out(), 9u);
-  EXPECT_EQ(sink.gateway[0].bus_state(), BUS_ERROR_ACTIVE);
-  EXPECT_EQ(sink.gateway[1].stamp_ns(), unix_nanoseconds(kStart + 2s));
+  ASSERT_EQ(sink.gateway_statuses().size(), 2u);
+  EXPECT_EQ(sink.gateway_statuses()[0].valves_online(), 1u);
+  EXPECT_EQ(sink.gateway_statuses()[0].valves_known(), 1u);
+  EXPECT_EQ(sink.gateway_statuses()[0].frames_out(), 9u);
+  EXPECT_EQ(sink.gateway_statuses()[0].bus_state(), BUS_ERROR_ACTIVE);
+  EXPECT_EQ(sink.gateway_statuses()[1].stamp_ns(), unix_nanoseconds(kStart + 2s));
 }
 
 // Issue 7, bug 7: an NTP or GPS step of the wall clock at boot took every valve offline (or
@@ -528,13 +492,13 @@ TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
 TEST_F(BridgeTest, AWallClockStepNeitherTakesValvesOfflineNorMovesDeadlines) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
-  auto jog = command(1, 110, COMMAND_MILLISECONDS_TO_RUN);
+  auto jog = from(kEcu, 110, command(1, COMMAND_MILLISECONDS_TO_RUN));
   jog.milliseconds(1500);
   command_at(bridge, kStart, jog);
 
   clock->step_wall(1h);  // the date is set: an hour later on the wall, no time passed
   bridge.tick();
-  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_TRUE(sink.presences().back().online());
   EXPECT_EQ(sink.states_of(110), std::vector{COMMAND_ACCEPTED});
 
   clock->step_wall(-2h);  // and set back again, further than it went
@@ -542,10 +506,10 @@ TEST_F(BridgeTest, AWallClockStepNeitherTakesValvesOfflineNorMovesDeadlines) {
   bridge.tick();
   EXPECT_EQ(sink.states_of(110), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   // Published stamps follow the wall clock as it is now.
-  EXPECT_EQ(sink.statuses.back().stamp_ns(), unix_nanoseconds(kStart - 1h + 1500ms));
+  EXPECT_EQ(sink.statuses().back().stamp_ns(), unix_nanoseconds(kStart - 1h + 1500ms));
   clock->advance(1501ms);  // 3 s of steady time without I'm Here
   bridge.tick();
-  EXPECT_FALSE(sink.presences.back().online());
+  EXPECT_FALSE(sink.presences().back().online());
 }
 
 // Issue 7, bug 2: when another serial took over an address, the displaced valve stayed online
@@ -554,12 +518,13 @@ TEST_F(BridgeTest, ADisplacedValvesCommandsNeverGoToTheValveThatTookItsAddress) 
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 2, kStart);
   announce(bridge, 0xD8, 1, kStart + 1s);  // TJV000001 joins and takes 0xD8
-  const auto displaced = std::find_if(sink.presences.begin(), sink.presences.end(),
+  const auto presences = sink.presences();
+  const auto displaced = std::find_if(presences.begin(), presences.end(),
                                       [](auto& p) { return p.serial() == 2 && !p.online(); });
-  ASSERT_NE(displaced, sink.presences.end()) << "the displaced valve's presence goes offline";
+  ASSERT_NE(displaced, presences.end()) << "the displaced valve's presence goes offline";
   (void)sent();
 
-  command_at(bridge, kStart + 1s, command(2, 120, COMMAND_STOP));
+  command_at(bridge, kStart + 1s, from(kEcu, 120, stop(2)));
   EXPECT_EQ(sink.states_of(120), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(sink.last_reason(),
             "valve TJV000002 is offline: TJV000001 took its address 0xD8 and it has not "
@@ -567,9 +532,9 @@ TEST_F(BridgeTest, ADisplacedValvesCommandsNeverGoToTheValveThatTookItsAddress) 
   EXPECT_TRUE(sent().empty()) << "nothing may reach TJV000001 on TJV000002's behalf";
 
   announce(bridge, 0xD9, 2, kStart + 1s + 31ms);  // it announces where it is now
-  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_TRUE(sink.presences().back().online());
   (void)sent();
-  command_at(bridge, kStart + 1100ms, command(2, 121, COMMAND_STOP));
+  command_at(bridge, kStart + 1100ms, from(kEcu, 121, stop(2)));
   EXPECT_EQ(sink.states_of(121), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   const auto frames = sent();
   ASSERT_EQ(frames.size(), 1u);
@@ -581,7 +546,7 @@ TEST_F(BridgeTest, ADisplacedValveKeepsWorkingOnItsCommand) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD8, 2, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{0.0}, kStart));
-  command_at(bridge, kStart, target(2, 130, 90.0f));
+  command_at(bridge, kStart, from(kEcu, 130, move_to(2, 90.0f)));
   announce(bridge, 0xD8, 1, kStart + 200ms);
   announce(bridge, 0xD9, 2, kStart + 231ms);
   deliver(bridge, from_valve(0xD9, codec::Position{90.0}, kStart + 1s));
@@ -593,7 +558,7 @@ TEST_F(BridgeTest, NextDeadlineIsTheEarliestOfStatusExpiryAndCommands) {
   const SteadyTime start = clock->steady();
   EXPECT_EQ(bridge.next_deadline(), start + 1s);  // the first gateway status
   announce(bridge, 0xD8, 1, kStart);
-  auto jog = command(1, 140, COMMAND_MILLISECONDS_TO_RUN);
+  auto jog = from(kEcu, 140, command(1, COMMAND_MILLISECONDS_TO_RUN));
   jog.milliseconds(300);
   command_at(bridge, kStart + 100ms, jog);
   EXPECT_EQ(bridge.next_deadline(), start + 400ms);
@@ -616,11 +581,11 @@ TEST_F(BridgeTest, AValveThatGoesQuietIsNeverDeclaredOfflineLate) {
   announce(bridge, 0xD8, 1, kStart + 300ms);  // 1 is now due at 800 ms, 2 at 600 ms
   EXPECT_LE(bridge.next_deadline(), start + 600ms + 1ns);
   tick_at(bridge, kStart + 500ms + 1ns);  // nothing due yet: a fresh look
-  EXPECT_TRUE(sink.presences.back().online());
+  EXPECT_TRUE(sink.presences().back().online());
   EXPECT_EQ(bridge.next_deadline(), start + 600ms + 1ns);
   tick_at(bridge, kStart + 600ms + 1ns);
-  EXPECT_EQ(sink.presences.back().serial(), 2u);
-  EXPECT_FALSE(sink.presences.back().online());
+  EXPECT_EQ(sink.presences().back().serial(), 2u);
+  EXPECT_FALSE(sink.presences().back().online());
   EXPECT_EQ(bridge.next_deadline(), start + 800ms + 1ns);
 }
 

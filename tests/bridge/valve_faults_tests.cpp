@@ -6,12 +6,11 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <atomic>
-#include <mutex>
 #include <thread>
 
 #include "support/eventually.hpp"
+#include "support/recording_sink.hpp"
+#include "support/valve_commands.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/sim/simulator.hpp"
@@ -21,70 +20,15 @@ namespace {
 
 using namespace std::chrono_literals;
 using teejet::testing::eventually;
+using teejet::testing::from;
+using teejet::testing::move_to;
+using teejet::testing::RecordingSink;
+using teejet::testing::request;
 using Clock = std::chrono::steady_clock;
 
 constexpr auto kDeadline = 10s;
 constexpr auto kOfflineAfter = 1500ms;
-
-// What the gateway publishes, with the (steady) time each sample arrived: read by the test
-// thread while the pump writes.
-class TimedSink : public Sink {
- public:
-  struct Status {
-    CommandStatus status;
-    Clock::time_point at;
-  };
-  struct Presence {
-    ValvePresence presence;
-    Clock::time_point at;
-  };
-
-  void presence(const ValvePresence& s) override {
-    std::lock_guard lock(mutex_);
-    presences_.push_back({s, Clock::now()});
-  }
-  void telemetry(const dds::TelemetrySample& s) override {
-    std::lock_guard lock(mutex_);
-    if (const auto* position = std::get_if<ValvePosition>(&s)) {
-      positions_.push_back({position->serial(), Clock::now()});
-    }
-  }
-  void error_cleared(std::uint32_t, ErrorKind) override {}
-  void command_status(const CommandStatus& s) override {
-    std::lock_guard lock(mutex_);
-    statuses_.push_back({s, Clock::now()});
-  }
-  void gateway_status(const GatewayStatus&) override {}
-
-  // The final status of a command (anything but ACCEPTED), if there is one yet.
-  std::optional<Status> final_status(std::uint32_t command_id) const {
-    std::lock_guard lock(mutex_);
-    for (const auto& s : statuses_) {
-      if (s.status.command_id() == command_id && s.status.state() != COMMAND_ACCEPTED) return s;
-    }
-    return std::nullopt;
-  }
-  std::optional<Presence> last_presence(std::uint32_t serial) const {
-    std::lock_guard lock(mutex_);
-    for (auto it = presences_.rbegin(); it != presences_.rend(); ++it) {
-      if (it->presence.serial() == serial) return *it;
-    }
-    return std::nullopt;
-  }
-  // Position samples published for `serial` since `since`.
-  std::size_t positions_since(std::uint32_t serial, Clock::time_point since) const {
-    std::lock_guard lock(mutex_);
-    return static_cast<std::size_t>(
-        std::count_if(positions_.begin(), positions_.end(),
-                      [&](const auto& p) { return p.first == serial && p.second >= since; }));
-  }
-
- private:
-  mutable std::mutex mutex_;
-  std::vector<Status> statuses_;
-  std::vector<Presence> presences_;
-  std::vector<std::pair<std::uint32_t, Clock::time_point>> positions_;
-};
+constexpr const char* kCommander = "faults-test";
 
 class ValveFaults : public ::testing::Test {
  protected:
@@ -126,39 +70,17 @@ class ValveFaults : public ::testing::Test {
 
   bool online(std::uint32_t serial) const {
     const auto presence = sink.last_presence(serial);
-    return presence && presence->presence.online();
-  }
-
-  static ValveCommand target(std::uint32_t serial, std::uint32_t id, float degrees,
-                             unsigned speed = 100) {
-    ValveCommand c;
-    c.serial(serial);
-    c.command_id(id);
-    c.origin("faults-test");
-    c.kind(COMMAND_TARGET_DEGREES);
-    c.speed_percent(static_cast<std::uint8_t>(speed));
-    c.direction(DIRECTION_OPEN);
-    c.degrees(degrees);
-    return c;
-  }
-  static ValveCommand version(std::uint32_t serial, std::uint32_t id) {
-    ValveCommand c;
-    c.serial(serial);
-    c.command_id(id);
-    c.origin("faults-test");
-    c.kind(COMMAND_REQUEST);
-    c.telemetry(TELEMETRY_VERSION);
-    return c;
+    return presence && presence->sample.online();
   }
 
   // Sends and waits for its final status.
-  TimedSink::Status run_command(const ValveCommand& command) {
+  RecordingSink::Arrived<CommandStatus> run_command(const ValveCommand& command) {
     bridge->on_command(command);
-    std::optional<TimedSink::Status> status;
+    std::optional<RecordingSink::Arrived<CommandStatus>> status;
     EXPECT_TRUE(eventually(
         [&] { return (status = sink.final_status(command.command_id())).has_value(); }, kDeadline))
         << "no final status for command " << command.command_id();
-    return status.value_or(TimedSink::Status{});
+    return status.value_or(RecordingSink::Arrived<CommandStatus>{});
   }
 
   template <class Fn>
@@ -171,7 +93,7 @@ class ValveFaults : public ::testing::Test {
     return std::chrono::duration_cast<std::chrono::milliseconds>(d).count();
   }
 
-  TimedSink sink;
+  RecordingSink sink;
   std::unique_ptr<sim::Simulator> simulator;
   std::unique_ptr<can::VirtualBus> gateway_bus;
   std::unique_ptr<Bridge> bridge;
@@ -181,7 +103,7 @@ class ValveFaults : public ::testing::Test {
 // (a) The highest serial: nobody takes its address, it simply goes quiet.
 TEST_F(ValveFaults, AValveThatGoesSilentMidMoveEndsItsCommandWithinTheOfflineTimeAndComesBack) {
   start(3);
-  bridge->on_command(target(3, 1, 90.0F, 10));  // 9 deg/s: 10 s of travel
+  bridge->on_command(from(kCommander, 1, move_to(3, 90.0F, 10)));  // 9 deg/s: 10 s of travel
   ASSERT_TRUE(eventually(
       [&] {
         return inspect_valve(3, [](const sim::SimulatedValve& v) { return v.cycle_count() == 1; });
@@ -189,10 +111,10 @@ TEST_F(ValveFaults, AValveThatGoesSilentMidMoveEndsItsCommandWithinTheOfflineTim
       kDeadline));
   const auto off_at = Clock::now();
   ASSERT_TRUE(simulator->power_off(3));
-  std::optional<TimedSink::Status> ended;
+  std::optional<RecordingSink::Arrived<CommandStatus>> ended;
   ASSERT_TRUE(eventually([&] { return (ended = sink.final_status(1)).has_value(); }, kDeadline));
-  EXPECT_EQ(ended->status.state(), COMMAND_TIMED_OUT);
-  EXPECT_EQ(ended->status.reason().to_string(), "valve TJV000003 went offline");
+  EXPECT_EQ(ended->sample.state(), COMMAND_TIMED_OUT);
+  EXPECT_EQ(ended->sample.reason().to_string(), "valve TJV000003 went offline");
   const auto ended_after = ended->at - off_at;
   EXPECT_LE(ended_after, kOfflineAfter + 200ms);
   EXPECT_FALSE(online(3));
@@ -205,18 +127,18 @@ TEST_F(ValveFaults, AValveThatGoesSilentMidMoveEndsItsCommandWithinTheOfflineTim
   const auto back_after = sink.last_presence(3)->at - on_at;
   // Polling re-armed: position samples flow again.
   ASSERT_TRUE(eventually([&] { return sink.positions_since(3, on_at) >= 3; }, kDeadline));
-  EXPECT_EQ(sink.last_presence(3)->presence.address(), 0xDA);
+  EXPECT_EQ(sink.last_presence(3)->sample.address(), 0xDA);
   std::printf("[ measured ] silent valve: online %lld ms after power-on\n", ms(back_after));
   EXPECT_LE(back_after, 1s);
-  const auto done = run_command(target(3, 2, 0.0F));
-  EXPECT_EQ(done.status.state(), COMMAND_COMPLETED) << done.status.reason().to_string();
+  const auto done = run_command(from(kCommander, 2, move_to(3, 0.0F)));
+  EXPECT_EQ(done.sample.state(), COMMAND_COMPLETED) << done.sample.reason().to_string();
 }
 
 // (a) A middle serial: the valve above moves down into its address, so it is displaced rather
 // than merely quiet; its command must still end within the offline time.
 TEST_F(ValveFaults, AValveWhoseAddressIsTakenWhileSilentEndsItsCommandWithinTheOfflineTime) {
   start(3);
-  bridge->on_command(target(2, 1, 90.0F, 10));
+  bridge->on_command(from(kCommander, 1, move_to(2, 90.0F, 10)));
   ASSERT_TRUE(eventually(
       [&] {
         return inspect_valve(2, [](const sim::SimulatedValve& v) { return v.cycle_count() == 1; });
@@ -224,26 +146,26 @@ TEST_F(ValveFaults, AValveWhoseAddressIsTakenWhileSilentEndsItsCommandWithinTheO
       kDeadline));
   const auto off_at = Clock::now();
   ASSERT_TRUE(simulator->power_off(2));
-  std::optional<TimedSink::Status> ended;
+  std::optional<RecordingSink::Arrived<CommandStatus>> ended;
   ASSERT_TRUE(eventually([&] { return (ended = sink.final_status(1)).has_value(); }, kDeadline));
-  EXPECT_EQ(ended->status.state(), COMMAND_TIMED_OUT);
-  EXPECT_EQ(ended->status.reason().to_string(), "valve TJV000002 went offline");
+  EXPECT_EQ(ended->sample.state(), COMMAND_TIMED_OUT);
+  EXPECT_EQ(ended->sample.reason().to_string(), "valve TJV000002 went offline");
   EXPECT_LE(ended->at - off_at, kOfflineAfter + 200ms);
   std::printf("[ measured ] displaced silent valve: command ended %lld ms after power-off\n",
               ms(ended->at - off_at));
   // TJV000003 moved into 0xD9 and works there.
-  EXPECT_EQ(run_command(target(3, 2, 10.0F)).status.state(), COMMAND_COMPLETED);
-  EXPECT_EQ(sink.last_presence(3)->presence.address(), 0xD9);
+  EXPECT_EQ(run_command(from(kCommander, 2, move_to(3, 10.0F))).sample.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(sink.last_presence(3)->sample.address(), 0xD9);
   // Back: re-ranked, 2 at 0xD9, 3 at 0xDA again, both commanded successfully.
   ASSERT_TRUE(simulator->power_on(2));
   ASSERT_TRUE(eventually(
       [&] {
-        return online(2) && sink.last_presence(2)->presence.address() == 0xD9 &&
-               sink.last_presence(3)->presence.address() == 0xDA;
+        return online(2) && sink.last_presence(2)->sample.address() == 0xD9 &&
+               sink.last_presence(3)->sample.address() == 0xDA;
       },
       kDeadline));
-  EXPECT_EQ(run_command(target(2, 3, 0.0F)).status.state(), COMMAND_COMPLETED);
-  EXPECT_EQ(run_command(target(3, 4, 0.0F)).status.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(run_command(from(kCommander, 3, move_to(2, 0.0F))).sample.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(run_command(from(kCommander, 4, move_to(3, 0.0F))).sample.state(), COMMAND_COMPLETED);
   EXPECT_EQ(bridge->counters().address_conflicts, 0u);  // a restart is no conflict
 }
 
@@ -260,7 +182,7 @@ TEST_F(ValveFaults, AValveThatRestartsUnnoticedIsPolledAgainOnceItsTelemetryStop
               ms(back_after));
   EXPECT_LE(back_after, 3500ms);  // two I'm Here periods of silence, and the next I'm Here
   EXPECT_TRUE(online(3));
-  EXPECT_EQ(run_command(target(3, 1, 30.0F)).status.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(run_command(from(kCommander, 1, move_to(3, 30.0F))).sample.state(), COMMAND_COMPLETED);
 }
 
 // (b)
@@ -276,17 +198,17 @@ TEST_F(ValveFaults, TwoValvesAtOneAddressAreRejectedNamingBothAndTheirTelemetryI
 
   const std::string reason = "address 0xD9 is claimed by TJV000002 and TJV000003";
   for (const std::uint32_t serial : {2u, 3u}) {
-    const auto rejected = run_command(target(serial, serial * 10, 45.0F));
-    EXPECT_EQ(rejected.status.state(), COMMAND_REJECTED);
-    EXPECT_EQ(rejected.status.reason().to_string(), reason);
+    const auto rejected = run_command(from(kCommander, serial * 10, move_to(serial, 45.0F)));
+    EXPECT_EQ(rejected.sample.state(), COMMAND_REJECTED);
+    EXPECT_EQ(rejected.sample.reason().to_string(), reason);
   }
   EXPECT_EQ(inspect_valve(2, [](const sim::SimulatedValve& v) { return v.cycle_count(); }), 0u);
   EXPECT_EQ(inspect_valve(3, [](const sim::SimulatedValve& v) { return v.cycle_count(); }), 0u);
   // Nothing from 0xD9 is published for either serial while valve 1 keeps reporting.
-  const auto from = Clock::now();
-  ASSERT_TRUE(eventually([&] { return sink.positions_since(1, from) >= 15; }, kDeadline));
-  EXPECT_EQ(sink.positions_since(2, from), 0u);
-  EXPECT_EQ(sink.positions_since(3, from), 0u);
+  const auto watched_from = Clock::now();
+  ASSERT_TRUE(eventually([&] { return sink.positions_since(1, watched_from) >= 15; }, kDeadline));
+  EXPECT_EQ(sink.positions_since(2, watched_from), 0u);
+  EXPECT_EQ(sink.positions_since(3, watched_from), 0u);
   EXPECT_EQ(bridge->counters().address_conflicts, 1u);  // counted once, not per I'm Here
 
   // A re-rank (a valve added) sends 3 back to 0xDA: the conflict is over.
@@ -294,11 +216,15 @@ TEST_F(ValveFaults, TwoValvesAtOneAddressAreRejectedNamingBothAndTheirTelemetryI
   ASSERT_TRUE(simulator->add_valve(sim::ValveConfig{.serial = 10}));
   std::uint32_t id = 100;
   ASSERT_TRUE(eventually(
-      [&] { return run_command(target(2, ++id, 10.0F)).status.state() == COMMAND_COMPLETED; },
+      [&] {
+        return run_command(from(kCommander, ++id, move_to(2, 10.0F))).sample.state() ==
+               COMMAND_COMPLETED;
+      },
       kDeadline));
   std::printf("[ measured ] address conflict cleared, valve commandable %lld ms after the move\n",
               ms(Clock::now() - moved_at));
-  EXPECT_EQ(run_command(target(3, 1000, 10.0F)).status.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(run_command(from(kCommander, 1000, move_to(3, 10.0F))).sample.state(),
+            COMMAND_COMPLETED);
   ASSERT_TRUE(eventually(
       [&] {
         return sink.positions_since(2, moved_at) > 0 && sink.positions_since(3, moved_at) > 0;
@@ -316,7 +242,10 @@ TEST_F(ValveFaults, AnAddressConflictEndsWhenOneValveGoesSilent) {
   ASSERT_TRUE(simulator->power_off(4));  // the highest: nobody else moves
   std::uint32_t id = 100;
   ASSERT_TRUE(eventually(
-      [&] { return run_command(target(2, ++id, 10.0F)).status.state() == COMMAND_COMPLETED; },
+      [&] {
+        return run_command(from(kCommander, ++id, move_to(2, 10.0F))).sample.state() ==
+               COMMAND_COMPLETED;
+      },
       kDeadline));
   const auto cleared_after = Clock::now() - off_at;
   std::printf("[ measured ] address conflict cleared %lld ms after one valve went silent\n",
@@ -328,7 +257,7 @@ TEST_F(ValveFaults, AnAddressConflictEndsWhenOneValveGoesSilent) {
 // (c)
 TEST_F(ValveFaults, AValveRestartingIntoBootCodeEndsItsCommandAndTakesOnlyRequests) {
   start(2);
-  bridge->on_command(target(2, 1, 90.0F, 10));
+  bridge->on_command(from(kCommander, 1, move_to(2, 90.0F, 10)));
   ASSERT_TRUE(eventually(
       [&] {
         return inspect_valve(2, [](const sim::SimulatedValve& v) { return v.cycle_count() == 1; });
@@ -337,33 +266,33 @@ TEST_F(ValveFaults, AValveRestartingIntoBootCodeEndsItsCommandAndTakesOnlyReques
   const auto restart_at = Clock::now();
   ASSERT_TRUE(simulator->power_off(2));
   ASSERT_TRUE(simulator->power_on(2, /*boot_mode=*/true));
-  std::optional<TimedSink::Status> ended;
+  std::optional<RecordingSink::Arrived<CommandStatus>> ended;
   ASSERT_TRUE(eventually([&] { return (ended = sink.final_status(1)).has_value(); }, kDeadline));
-  EXPECT_EQ(ended->status.state(), COMMAND_TIMED_OUT);
-  EXPECT_EQ(ended->status.reason().to_string(),
+  EXPECT_EQ(ended->sample.state(), COMMAND_TIMED_OUT);
+  EXPECT_EQ(ended->sample.reason().to_string(),
             "valve TJV000002 restarted: it is running boot code");
   std::printf("[ measured ] restart into boot code: command ended %lld ms after the restart\n",
               ms(ended->at - restart_at));
   EXPECT_LE(ended->at - restart_at, 1s);
   const auto presence = sink.last_presence(2);
-  EXPECT_TRUE(presence->presence.online());
-  EXPECT_TRUE(presence->presence.boot_mode());
+  EXPECT_TRUE(presence->sample.online());
+  EXPECT_TRUE(presence->sample.boot_mode());
 
-  const auto rejected = run_command(target(2, 2, 0.0F));
-  EXPECT_EQ(rejected.status.state(), COMMAND_REJECTED);
-  EXPECT_EQ(rejected.status.reason().to_string(), "valve TJV000002 is running boot code");
+  const auto rejected = run_command(from(kCommander, 2, move_to(2, 0.0F)));
+  EXPECT_EQ(rejected.sample.state(), COMMAND_REJECTED);
+  EXPECT_EQ(rejected.sample.reason().to_string(), "valve TJV000002 is running boot code");
   EXPECT_EQ(inspect_valve(2, [](const sim::SimulatedValve& v) { return v.cycle_count(); }), 1u);
-  const auto asked = run_command(version(2, 3));
-  EXPECT_EQ(asked.status.state(), COMMAND_COMPLETED) << asked.status.reason().to_string();
+  const auto asked = run_command(from(kCommander, 3, request(2, TELEMETRY_VERSION)));
+  EXPECT_EQ(asked.sample.state(), COMMAND_COMPLETED) << asked.sample.reason().to_string();
 
   const auto app_at = Clock::now();
   ASSERT_TRUE(simulator->power_off(2));
   ASSERT_TRUE(simulator->power_on(2));
-  ASSERT_TRUE(eventually([&] { return !sink.last_presence(2)->presence.boot_mode(); }, kDeadline));
+  ASSERT_TRUE(eventually([&] { return !sink.last_presence(2)->sample.boot_mode(); }, kDeadline));
   ASSERT_TRUE(eventually([&] { return sink.positions_since(2, app_at) >= 3; }, kDeadline));
   std::printf("[ measured ] back in application code: polled again %lld ms after the restart\n",
               ms(Clock::now() - app_at));
-  EXPECT_EQ(run_command(target(2, 4, 0.0F)).status.state(), COMMAND_COMPLETED);
+  EXPECT_EQ(run_command(from(kCommander, 4, move_to(2, 0.0F))).sample.state(), COMMAND_COMPLETED);
 }
 
 }  // namespace
