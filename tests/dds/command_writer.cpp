@@ -1,40 +1,64 @@
 // Test peer: writes one command to the given domain, prints "sent", then waits to be killed,
-// so a test can make a commanding writer vanish the hard way.
+// so a test can make a commanding writer vanish the hard way. Usage: command_writer DOMAIN SERIAL
+// The command is Manual, opening at 50 %. Exits 1, saying why on standard error, when DDS
+// refuses it or no command reader (a gateway's) matched it within kMatchDeadline.
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
+#include "support/eventually.hpp"
+#include "support/valve_commands.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
+namespace {
+
+// As long as DdsPeer waits for a gateway: the tests that run this peer wait longer for "sent",
+// so they see the reason below rather than their own timeout.
+constexpr std::chrono::seconds kMatchDeadline{15};
+
+int refused(const std::string& what) {
+  std::fprintf(stderr, "command_writer: %s\n", what.c_str());
+  return 1;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  if (argc != 3) return 2;
+  if (argc != 3) {
+    std::fputs("usage: command_writer DOMAIN SERIAL\n", stderr);
+    return 2;
+  }
   auto participant =
       teejet::dds::Participant::create({.domain = std::atoi(argv[1]), .name = "command-writer"});
-  if (!participant) {
-    std::fprintf(stderr, "command_writer: %s\n", participant.error().reason.c_str());
-    return 1;
-  }
+  if (!participant) return refused(participant.error().reason);
   auto topic = (*participant)->topic<teejet::ValveCommandPubSubType>(teejet::dds::topics::kCommand);
-  if (!topic) return 1;
+  if (!topic) return refused(topic.error().reason);
   auto writer = (*participant)->writer(*topic, teejet::dds::topics::command_writer_qos());
-  if (!writer) return 1;
-  teejet::ValveCommand command;
-  command.serial(static_cast<std::uint32_t>(std::atoi(argv[2])));
-  command.command_id(1);
-  command.kind(teejet::COMMAND_MANUAL);
-  command.speed_percent(50);
-  command.direction(teejet::DIRECTION_OPEN);
+  if (!writer) return refused(writer.error().reason);
+
   // Wait for the gateway's reader so the command is not written into the void.
-  eprosima::fastdds::dds::PublicationMatchedStatus matched;
-  while ((*writer)->get_publication_matched_status(matched) ==
-             eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK &&
-         matched.current_count == 0) {
-    usleep(10'000);
+  const bool matched = teejet::testing::eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus status;
+        return (*writer)->get_publication_matched_status(status) ==
+                   eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK &&
+               status.current_count > 0;
+      },
+      kMatchDeadline);
+  if (!matched) {
+    return refused("no command reader matched within " + std::to_string(kMatchDeadline.count()) +
+                   " s on domain " + argv[1]);
   }
-  (*writer)->write(&command);
+  auto command =
+      teejet::testing::from("command-writer", 1,
+                            teejet::testing::command(static_cast<std::uint32_t>(std::atoi(argv[2])),
+                                                     teejet::COMMAND_MANUAL, 50));
+  if (!(*writer)->write(&command)) return refused("DDS refused to write the command");
   std::puts("sent");
   std::fflush(stdout);
   for (;;) pause();

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "support/valve_commands.hpp"
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/dds/names.hpp"
@@ -146,14 +147,8 @@ TEST(FromSample, HundredthsAreTheDecimalsTheValveSent) {
   }
 }
 
-ValveCommand command(CommandKind kind) {
-  ValveCommand c;
-  c.serial(1);
-  c.kind(kind);
-  c.speed_percent(50);
-  c.direction(DIRECTION_OPEN);
-  return c;
-}
+// Valve 1, opening at half speed: a speed that is lost or defaulted shows in the messages.
+ValveCommand command(CommandKind kind) { return testing::command(1, kind, 50); }
 
 TEST(ToMessage, EveryCommandKind) {
   EXPECT_EQ(*to_message(command(COMMAND_STOP)), codec::ToValveMessage{codec::Stop{}});

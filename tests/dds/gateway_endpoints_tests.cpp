@@ -16,6 +16,7 @@
 #include "support/eventually.hpp"
 #include "support/subprocess.hpp"
 #include "support/test_domain.hpp"
+#include "support/valve_commands.hpp"
 #include "teejet/dds/command_subscription.hpp"
 #include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/dds/topics.hpp"
@@ -32,8 +33,13 @@ using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 using teejet::testing::DdsPeer;
 using teejet::testing::eventually;
+using teejet::testing::from;
+using teejet::testing::stop;
 using teejet::testing::Subprocess;
 using teejet::testing::test_domain;
+
+// How long a test waits for what it expects before it fails.
+constexpr auto kDeadline = 10s;
 
 ValvePresence presence(std::uint32_t serial, std::uint8_t address) {
   ValvePresence p;
@@ -56,27 +62,23 @@ std::vector<std::pair<Sample, SampleInfo>> take_all(DataReader* reader) {
   return out;
 }
 
+// True once `writer` matched a reader (the gateway's) within `deadline`.
+bool matched_within(DataWriter* writer, std::chrono::milliseconds deadline) {
+  return eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus status;
+        writer->get_publication_matched_status(status);
+        return status.current_count > 0;
+      },
+      deadline);
+}
+
 // A command writer of an ECU, matched with the gateway's reader.
 DataWriter* command_writer(DdsPeer& ecu) {
   auto topic = ecu.participant().topic<ValveCommandPubSubType>(topics::kCommand);
   auto writer = ecu.participant().writer(*topic, topics::command_writer_qos());
   if (!writer) return nullptr;
-  const bool matched = eventually(
-      [&] {
-        eprosima::fastdds::dds::PublicationMatchedStatus status;
-        (*writer)->get_publication_matched_status(status);
-        return status.current_count > 0;
-      },
-      10s);
-  return matched ? *writer : nullptr;
-}
-
-ValveCommand stop_command(std::uint32_t id) {
-  ValveCommand command;
-  command.serial(1);  // one instance: KEEP_LAST would drop, KEEP_ALL must not
-  command.command_id(id);
-  command.kind(COMMAND_STOP);
-  return command;
+  return matched_within(*writer, kDeadline) ? *writer : nullptr;
 }
 
 class GatewayEndpointsTest : public ::testing::Test {
@@ -183,7 +185,7 @@ TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
         }
         return seen.size() == 3;
       },
-      10s));
+      kDeadline));
   EXPECT_EQ(seen[1], 0xDB);
   EXPECT_EQ(seen[2], 0xD9);
 }
@@ -207,7 +209,7 @@ TEST_F(GatewayEndpointsTest, EveryTelemetryTypeReachesItsTopicWithTheCanReceiveT
         publisher->telemetry(count);
         return position->get_unread_count() > 0 && cycles->get_unread_count() > 0;
       },
-      10s));
+      kDeadline));
   auto positions = take_all<ValvePosition>(position);
   ASSERT_FALSE(positions.empty());
   EXPECT_FLOAT_EQ(positions[0].first.degrees(), 42.5f);
@@ -226,7 +228,7 @@ TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {
   error.value(17.2f);
   error.limit(16.5f);
   publisher->telemetry(error);
-  ASSERT_TRUE(eventually([&] { return reader->get_unread_count() > 0; }, 10s));
+  ASSERT_TRUE(eventually([&] { return reader->get_unread_count() > 0; }, kDeadline));
   (void)take_all<ValveError>(reader);
   publisher->error_cleared(9, ERROR_HIGH_VOLTAGE);
   bool disposed = false;
@@ -238,7 +240,7 @@ TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {
         }
         return disposed;
       },
-      10s));
+      kDeadline));
 }
 
 TEST_F(GatewayEndpointsTest, EveryCommandArrivesInOrderWithItsWriter) {
@@ -247,12 +249,13 @@ TEST_F(GatewayEndpointsTest, EveryCommandArrivesInOrderWithItsWriter) {
   DdsPeer ecu(test_domain(), "ecu");
   auto* writer = command_writer(ecu);
   ASSERT_NE(writer, nullptr);
+  // All to valve 1: one instance, where KEEP_LAST would drop and KEEP_ALL must not.
   for (std::uint32_t id = 1; id <= 200; ++id) {
-    auto command = stop_command(id);
+    auto command = from("ecu", id, stop(1));
     ASSERT_EQ(writer->write(&command), true);
   }
   const auto events = collect(
-      *subscription, [](const auto& e) { return e.commands.size() >= 200; }, 10s);
+      *subscription, [](const auto& e) { return e.commands.size() >= 200; }, kDeadline);
   ASSERT_EQ(events.commands.size(), 200u);
   for (std::uint32_t i = 0; i < 200; ++i) ASSERT_EQ(events.commands[i].command.command_id(), i + 1);
   EXPECT_EQ(events.commands.front().writer, events.commands.back().writer);
@@ -263,10 +266,17 @@ TEST_F(GatewayEndpointsTest, AWaitEndsAtItsTimeoutOrWhenWoken) {
   auto subscription = subscribe();
   ASSERT_NE(subscription, nullptr);
   EXPECT_TRUE(subscription->wait(10ms).commands.empty());
+  // A woken wait returns before its timeout: one that ran to it was not woken.
   subscription->wake();  // before the wait: it must not block then
-  EXPECT_TRUE(subscription->wait(1h).commands.empty());
+  auto waited_from = std::chrono::steady_clock::now();
+  EXPECT_TRUE(subscription->wait(kDeadline).commands.empty());
+  EXPECT_LT(std::chrono::steady_clock::now() - waited_from, kDeadline)
+      << "a wake() before the wait was lost";
   lost->report("01.02.03");
-  EXPECT_EQ(subscription->wait(1h).lost_commanders, std::vector<std::string>{"01.02.03"});
+  waited_from = std::chrono::steady_clock::now();
+  EXPECT_EQ(subscription->wait(kDeadline).lost_commanders, std::vector<std::string>{"01.02.03"});
+  EXPECT_LT(std::chrono::steady_clock::now() - waited_from, kDeadline)
+      << "a lost commander did not wake the wait";
 }
 
 // Issue 7, bug 5: the subscription registered as listener on a reader it did not own and never
@@ -279,33 +289,40 @@ TEST_F(GatewayEndpointsTest, ADestroyedSubscriptionTakesItsReaderWithIt) {
   auto writer = ecu.participant().writer(*topic, topics::command_writer_qos());
   ASSERT_TRUE(writer);
   // A reader that still existed would match within a discovery round; give it several.
-  EXPECT_FALSE(eventually(
-      [&] {
-        eprosima::fastdds::dds::PublicationMatchedStatus matched;
-        (*writer)->get_publication_matched_status(matched);
-        return matched.current_count > 0;
-      },
-      2s));
-  auto command = stop_command(1);
-  EXPECT_TRUE((*writer)->write(&command));
-  // A new subscription works as the first did.
+  EXPECT_FALSE(matched_within(*writer, 2s));
+  auto unheard = from("ecu", 1, stop(1));
+  EXPECT_TRUE((*writer)->write(&unheard));
+
+  // A new subscription works as the first did: the ECU's writer finds it, and the next command
+  // arrives. Commands are VOLATILE: the one written while no subscription existed does not.
   auto again = subscribe();
-  ASSERT_NE(command_writer(ecu), nullptr);
+  ASSERT_NE(again, nullptr);
+  ASSERT_TRUE(matched_within(*writer, kDeadline)) << "the new subscription's reader never matched";
+  auto next = from("ecu", 2, stop(1));
+  ASSERT_TRUE((*writer)->write(&next));
+  const auto events = collect(
+      *again, [](const auto& e) { return !e.commands.empty(); }, kDeadline);
+  ASSERT_EQ(events.commands.size(), 1u);
+  EXPECT_EQ(events.commands[0].command.command_id(), 2u);
+  EXPECT_EQ(events.commands[0].command.kind(), COMMAND_STOP);
+  EXPECT_FALSE(events.commands[0].writer.empty());
 }
 
 TEST_F(GatewayEndpointsTest, AKilledCommanderIsReportedLostForTheFailSafe) {
   auto subscription = subscribe();
   ASSERT_NE(subscription, nullptr);
   Subprocess commander({COMMAND_WRITER_PATH, std::to_string(test_domain()), "77"});
+  // The writer gives up, saying why, once no command reader matched it within 15 s.
+  ASSERT_TRUE(commander.wait_for_stdout("sent", 2 * kDeadline)) << commander.err();
   const auto first = collect(
-      *subscription, [](const auto& e) { return !e.commands.empty(); }, 20s);
+      *subscription, [](const auto& e) { return !e.commands.empty(); }, kDeadline);
   ASSERT_FALSE(first.commands.empty()) << "no command arrived";
   const auto killed_at = std::chrono::steady_clock::now();
   commander.signal(SIGKILL);
-  commander.wait(commander.elapsed() + 10s);  // reaps it
+  commander.wait(commander.elapsed() + kDeadline);  // reaps it
 
   const auto lost_events = collect(
-      *subscription, [](const auto& e) { return !e.lost_commanders.empty(); }, 10s);
+      *subscription, [](const auto& e) { return !e.lost_commanders.empty(); }, kDeadline);
   ASSERT_FALSE(lost_events.lost_commanders.empty()) << "liveliness loss not seen";
   const auto noticed_after = std::chrono::steady_clock::now() - killed_at;
   EXPECT_EQ(lost_events.lost_commanders.front(), first.commands.front().writer);
