@@ -5,16 +5,24 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fstream>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 #include <thread>
 
 #include "info.hpp"
 #include "recorder.hpp"
 #include "replayer.hpp"
+#include "support/dds_peer.hpp"
+#include "support/eventually.hpp"
 #include "support/scratch_dir.hpp"
+#include "support/test_domain.hpp"
+#include "support/valve_commands.hpp"
 #include "teejet/mcap/reader.hpp"
 #include "teejet/mcap/writer.hpp"
 #include "teejet/recording/catalog.hpp"
@@ -27,7 +35,7 @@ using mcap::Bytes;
 using ::testing::HasSubstr;
 
 constexpr std::uint64_t kStart = 1'790'000'000'000'000'000ull;
-constexpr int kDomain = 37;
+constexpr auto kDeadline = std::chrono::seconds(10);
 
 Bytes position_payload(std::uint32_t serial, float degrees) {
   ValvePosition sample;
@@ -102,7 +110,7 @@ class RecordingFiles : public ::testing::Test {
                                            replay::ReplayOptions options = fast()) {
     options.file = path;
     options.wait_for_readers = std::chrono::milliseconds(0);
-    options.domain = kDomain;
+    options.domain = testing::test_domain();
     std::atomic<bool> stop{false};
     return replay::replay(options, stop);
   }
@@ -248,24 +256,58 @@ TEST_F(RecordingFiles, TheRateScalesTheRecordedGaps) {
   EXPECT_GE(took, std::chrono::milliseconds(110));
 }
 
+// The degrees of every position a subscriber hears, taken on Fast DDS's thread as they arrive.
+class PositionsHeard final : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    ValvePosition sample;
+    eprosima::fastdds::dds::SampleInfo info;
+    std::lock_guard lock(mutex_);
+    while (reader->take_next_sample(&sample, &info) ==
+           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+      if (info.valid_data) degrees_.push_back(sample.degrees());
+    }
+  }
+  std::vector<float> degrees() const {
+    std::lock_guard lock(mutex_);
+    return degrees_;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<float> degrees_;
+};
+
 TEST_F(RecordingFiles, LoopStartsAgainUntilStopped) {
+  // 12 positions, 0 to 11 degrees: a subscriber hears them again and again until the stop.
   const auto path = save("loop.mcap", make_file({}));
+  PositionsHeard heard;
+  testing::DdsPeer subscriber(testing::test_domain(), "loop-subscriber");
+  ASSERT_NE(subscriber.reader<ValvePosition>(dds::topics::state_reader_qos(), &heard), nullptr);
   replay::ReplayOptions options;
   options.file = path;
   options.loop = true;
   options.rate = 10;  // 1.1 ms a pass
-  options.wait_for_readers = std::chrono::milliseconds(0);
-  options.domain = kDomain;
+  options.wait_for_readers = kDeadline;
+  options.domain = testing::test_domain();
   std::atomic<bool> stop{false};
+  bool three_passes_heard = false;
   std::thread stopper([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    // Each pass ends at 11 degrees: heard three times, three whole passes reached the subscriber.
+    three_passes_heard = testing::eventually(
+        [&] { return std::ranges::count(heard.degrees(), 11.0f) >= 3; }, kDeadline);
     stop = true;
   });
   const auto replayed = replay::replay(options, stop);
   stopper.join();
+  EXPECT_TRUE(three_passes_heard) << heard.degrees().size() << " positions heard";
   ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
   EXPECT_GE(replayed->loops, 3);
   EXPECT_GE(replayed->published, 36u);
+  EXPECT_EQ(replayed->failed, 0u);
+  const auto degrees = heard.degrees();
+  EXPECT_EQ(std::set<float>(degrees.begin(), degrees.end()),
+            (std::set<float>{0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}));
 }
 
 TEST_F(RecordingFiles, TopicGlobsChooseWhatIsReplayed) {
@@ -282,9 +324,7 @@ TEST_F(RecordingFiles, TopicGlobsChooseWhatIsReplayed) {
 }
 
 TEST_F(RecordingFiles, CommandsAreReplayedOnlyWhenAsked) {
-  ValveCommand command;
-  command.serial(1);
-  command.kind(COMMAND_STOP);
+  auto command = testing::stop(1);
   ValveCommandPubSubType type;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&command)());
   ASSERT_TRUE(type.serialize(&command, &payload));
