@@ -43,6 +43,7 @@ using fixture::sim_config;
 using fixture::watch_wire;
 using teejet::testing::command;
 using teejet::testing::move_to;
+using teejet::testing::request;
 
 class GatewayE2E : public ::testing::Test {
  protected:
@@ -178,9 +179,8 @@ TEST_F(GatewayE2E, EveryCommandKindReachesItsFinalState) {
   for (auto telemetry : {TELEMETRY_VERSION, TELEMETRY_POSITION, TELEMETRY_TEMPERATURE,
                          TELEMETRY_VOLTAGE, TELEMETRY_CURRENT, TELEMETRY_DEGREES_PER_SECOND,
                          TELEMETRY_SPEED_DIRECTION, TELEMETRY_RUN_TIME, TELEMETRY_CYCLE_COUNTS}) {
-    auto request = command(1, COMMAND_REQUEST);
-    request.telemetry(telemetry);
-    EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(request))), done) << "telemetry " << telemetry;
+    EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(request(1, telemetry)))), done)
+        << "telemetry " << telemetry;
   }
   auto baud = command(1, COMMAND_SET_BAUD_RATE);
   baud.bit_rate(500000);
@@ -372,9 +372,7 @@ TEST_F(GatewayE2E, HostileCommandsAreRejectedWithAReasonAndNeverReachTheBus) {
   auto manual_direction = command(1, COMMAND_MANUAL);
   manual_direction.direction(static_cast<Direction>(0x7FFFFFFF));
   commands.emplace_back("manual direction 0x7FFFFFFF", manual_direction);
-  auto undefined_telemetry = command(1, COMMAND_REQUEST);
-  undefined_telemetry.telemetry(static_cast<Telemetry>(99));
-  commands.emplace_back("telemetry 99", undefined_telemetry);
+  commands.emplace_back("telemetry 99", request(1, static_cast<Telemetry>(99)));
   auto baud = command(1, COMMAND_SET_BAUD_RATE);
   baud.bit_rate(125000);
   commands.emplace_back("set baud rate (not allowed)", baud);
@@ -501,7 +499,7 @@ TEST_F(GatewayE2E, WhenACommanderDiesItsValvesAreStopped) {
 
   // tests/dds/command_writer: writes Manual (open, 50 %) for serial 1, then waits to be killed.
   teejet::testing::Subprocess commander({COMMAND_WRITER_PATH, std::to_string(test_domain()), "1"});
-  ASSERT_TRUE(commander.wait_for_stdout("sent", 20s));
+  ASSERT_TRUE(commander.wait_for_stdout("sent", 20s)) << commander.err();
   ASSERT_TRUE(eventually([&] { return running(1); }, 5s)) << "the manual run never started";
   commander.signal(SIGKILL);
   const auto killed_at = std::chrono::steady_clock::now();

@@ -44,7 +44,9 @@ using fixture::position_of;
 using fixture::sim_config;
 using fixture::watch_wire;
 using teejet::testing::command;
+using teejet::testing::from;
 using teejet::testing::move_to;
+using teejet::testing::request;
 using Peer = teejet::testing::DdsPeer;
 
 class GatewayE2E : public ::testing::Test {
@@ -181,12 +183,6 @@ class Commander final : public eprosima::fastdds::dds::DataReaderListener {
   std::vector<CommandStatus> statuses_;
 };
 
-ValveCommand from(const std::string& origin, std::uint32_t id, ValveCommand command) {
-  command.origin(origin);
-  command.command_id(id);
-  return command;
-}
-
 // The controller-to-valve frames `wire` saw since the last call, decoded, the gateway's own poll
 // requests left out: a test asks for what its commands made.
 std::vector<std::pair<std::uint8_t, codec::ToValveMessage>> commands_on(can::VirtualBus& wire) {
@@ -260,18 +256,13 @@ TEST_F(GatewayE2E, HostileCommandsAtTheLimitsEndInTheirFinalStatesWithExactFrame
   EXPECT_NEAR(after_speed_zero, before_speed_zero, 0.05) << "a move at speed 0 moved the valve";
 
   // Resend on version: the IDL says version is sent once.
-  auto version = command(1, COMMAND_REQUEST);
-  version.telemetry(TELEMETRY_VERSION);
-  version.resend_tenths(1);
-  statuses = run(version);
+  statuses = run(request(1, TELEMETRY_VERSION, 1));
   ASSERT_EQ(Peer::states(statuses), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(statuses[0].reason().to_string(),
             "version: resend_tenths 1 is not 0: the valve sends it once");
   // The slowest resend the sheet allows, 25.5 s: answered once now.
-  auto slowest = command(1, COMMAND_REQUEST);
-  slowest.telemetry(TELEMETRY_TEMPERATURE);
-  slowest.resend_tenths(255);
-  EXPECT_EQ(Peer::states(run(slowest)), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(Peer::states(run(request(1, TELEMETRY_TEMPERATURE, 255))),
+            (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   EXPECT_EQ(commands_on(*wire), (std::vector<Expected>{{0xD8, codec::RequestTemperature{255}}}));
 }
 
@@ -378,7 +369,8 @@ TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
   const auto flood_start = std::chrono::steady_clock::now();
   double during = 0;
   std::thread bystander([&] {
-    while (written < kFlood / 2) std::this_thread::yield();
+    // Half-way through the flood, which is cut short after 20 s.
+    EXPECT_TRUE(eventually([&] { return written >= kFlood / 2; }, 30s));
     during = accept_latency(100, 45);
   });
   for (std::uint32_t i = 1; i <= kFlood; ++i) {

@@ -32,14 +32,7 @@ constexpr auto kOfflineAfter = 1500ms;  // fixture::sim_config's offline_after
 using fixture::make_gateway;
 using fixture::sim_config;
 using teejet::testing::move_to;
-
-ValveCommand version_request(std::uint32_t serial) {
-  ValveCommand c;
-  c.serial(serial);
-  c.kind(COMMAND_REQUEST);
-  c.telemetry(TELEMETRY_VERSION);
-  return c;
-}
+using teejet::testing::request;
 
 std::uint32_t cycles_of(Gateway& gateway, std::uint32_t serial) {
   return gateway.simulator()->inspect(
@@ -161,7 +154,7 @@ TEST_F(ValveFaultsE2E, AValveRestartingIntoBootCodeEndsItsCommandAndTakesOnlyReq
   ASSERT_EQ(Ecu::states(rejected), std::vector{COMMAND_REJECTED});
   EXPECT_EQ(rejected[0].reason().to_string(), "valve TJV000002 is running boot code");
   EXPECT_EQ(cycles_of(*gateway, 2), 1u);  // never reached the valve
-  EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(version_request(2)))), kDone);
+  EXPECT_EQ(Ecu::states(ecu.follow(ecu.send(request(2, TELEMETRY_VERSION)))), kDone);
 
   const auto app_at = Clock::now();
   ASSERT_TRUE(gateway->simulator()->power_off(2));
