@@ -8,12 +8,15 @@
 namespace teejet::web {
 namespace {
 
-using testing::move;
+using testing::from;
+using testing::kOrigin;
+using testing::move_to;
 using testing::status;
+using testing::stop;
 
 TEST(WebTargets, AMoveSetsTheTargetUntilItsFinalStatus) {
   TargetTracker tracker;
-  tracker.on_sent(move(1, 7, 74.6f));
+  tracker.on_sent(from(kOrigin, 7, move_to(1, 74.6f)));
   EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
   tracker.on_status(status(1, 7, COMMAND_ACCEPTED));
   EXPECT_EQ(tracker.targets(), (Targets{{1, 74.6}}));
@@ -23,15 +26,11 @@ TEST(WebTargets, AMoveSetsTheTargetUntilItsFinalStatus) {
 
 TEST(WebTargets, ALateStatusOfAnOlderMoveLeavesTheNewTargetAndAStopClearsIt) {
   TargetTracker tracker;
-  tracker.on_sent(move(1, 7, 10.0f));
-  tracker.on_sent(move(1, 8, 20.0f));
+  tracker.on_sent(from(kOrigin, 7, move_to(1, 10.0f)));
+  tracker.on_sent(from(kOrigin, 8, move_to(1, 20.0f)));
   tracker.on_status(status(1, 7, COMMAND_SUPERSEDED));
   EXPECT_EQ(tracker.targets(), (Targets{{1, 20.0}}));
-  ValveCommand stop;
-  stop.serial(1);
-  stop.command_id(9);
-  stop.kind(COMMAND_STOP);
-  tracker.on_sent(stop);
+  tracker.on_sent(from(kOrigin, 9, stop(1)));
   EXPECT_TRUE(tracker.targets().empty());
 }
 
