@@ -368,10 +368,13 @@ std::vector<codec::FromValveMessage> SimulatedValve::advance(SteadyTime now) {
       return codec::IAmHere{config_.part_number, config_.serial, boot_mode_};
     });
   }
-  for (auto& [id, latched] : errors_) {
+  // Named, not structured bindings: clang before 16 cannot capture those.
+  for (auto& entry : errors_) {
+    Latched& latched = entry.second;
     fire(latched.next, kErrorRepeatPeriod, [&] { return latched.error; });
   }
-  for (auto& [id, resend] : resends_) {
+  for (auto& entry : resends_) {
+    Periodic& resend = entry.second;
     fire(resend.next, resend.period, [&] { return *reply_to(resend.request, now); });
   }
   std::stable_sort(due.begin(), due.end(), [](const Due& a, const Due& b) { return a.at < b.at; });
