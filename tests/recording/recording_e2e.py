@@ -223,6 +223,29 @@ def merge_state_gaps(a, b, what, key):
     return both_a, both_b, len(stamps_a ^ stamps_b)
 
 
+def early_state_gaps(a, b, what, key):
+    """Before the settle point, per instance of a KEEP_LAST 1 topic: the samples both sides got
+    (same source timestamp) agree in order and values; of those only one side got, the ones
+    before the other side's first sample are a late match, the others gaps (see
+    MAX_STATE_GAPS_PER_MILLION). Returns (both got, late-match misses, gaps)."""
+    stamps_a = [int(sample["source_ns"]) for sample in a]
+    stamps_b = [int(message["publish_time"]) for message in b]
+    common = set(stamps_a) & set(stamps_b)
+    check([normalise(x["data"]) for x, t in zip(a, stamps_a) if t in common] ==
+          [normalise(x["data"]) for x, t in zip(b, stamps_b) if t in common],
+          f"{what}: {key}: the early samples both sides got differ")
+    missed = gaps = 0
+    for own, other in ((stamps_a, stamps_b), (stamps_b, stamps_a)):
+        for stamp in set(own) - common:
+            if not other or stamp < min(other):
+                missed += 1
+            else:
+                check(key[0] != "teejet/valve/command",
+                      f"{what}: {key}: a command only one side got (commands are KEEP_ALL)")
+                gaps += 1
+    return len(common), missed, gaps
+
+
 def compare_topics(logged, recorded, what, settle_ns=0, prefix=False, allow_state_gaps=False):
     """Per instance: the same samples in the same order, with the same values and source
     timestamps. Before `settle_ns` (when the test starts commanding, long after every reader
@@ -244,11 +267,18 @@ def compare_topics(logged, recorded, what, settle_ns=0, prefix=False, allow_stat
     for key in sorted(recorded, key=str):
         early_a, a = split_at(logged.get(key, []), settle_ns, "source_ns")
         early_b, b = split_at(recorded[key], settle_ns, "publish_time")
-        shorter, longer = sorted((early_a, early_b), key=len)
-        tail = longer[len(longer) - len(shorter):] if shorter else []
-        check([normalise(x["data"]) for x in shorter] == [normalise(x["data"]) for x in tail],
-              f"{what}: {key}: the early samples differ beyond a late match")
-        missed += len(longer) - len(shorter)
+        if allow_state_gaps:
+            # Gaps come early too (under load: 1 in 10 runs of split at load 10).
+            both, missed_here, gaps_here = early_state_gaps(early_a, early_b, what, key)
+            compared += both
+            missed += missed_here
+            gaps += gaps_here
+        else:
+            shorter, longer = sorted((early_a, early_b), key=len)
+            tail = longer[len(longer) - len(shorter):] if shorter else []
+            check([normalise(x["data"]) for x in shorter] == [normalise(x["data"]) for x in tail],
+                  f"{what}: {key}: the early samples differ beyond a late match")
+            missed += len(longer) - len(shorter)
         if prefix:
             a = a[:len(b)]
         counts[key[0]] = counts.get(key[0], 0) + len(b) + len(early_b)
@@ -463,14 +493,37 @@ def case_late(run):
     run.valvectl("list", "--wait-for", "4", "--timeout", "20")
     run.valvectl("move", "TJV000002", "--to", "30", "--speed", "100", "--wait", "--timeout", "20")
     started_ns = time.time_ns()
-    recorder = run.start_recorder("late.mcap", ["--duration", "1"])
-    check(recorder.wait(timeout=30) == 0, "teejet-record --duration 1 did not exit 0")
-    run.stop(gateway, signal.SIGTERM)
-    messages, _ = run.read_mcap(run.path("late.mcap"))
-    early = [m for m in messages if int(m["publish_time"]) < started_ns]
+    recorder = run.start_recorder("late.mcap")
 
     def serials(samples, topic):
         return {m["data"]["serial"] for m in samples if m["topic"] == topic}
+
+    # Until the recording holds what a late joiner must get, read as it grows (chunks close at
+    # least once a second): each reader matches the gateway's writer on its own, and at load 10
+    # presence had not come within a --duration of 1 s (1 of 10 runs).
+    def has_state(samples):
+        return (serials(samples, "teejet/valve/version") == {1, 2, 3, 4} and
+                serials(samples, "teejet/valve/presence") == {1, 2, 3, 4} and
+                serials(samples, "teejet/valve/error") == {3} and
+                all(any(m["topic"] == topic for m in samples) for topic in (
+                    "teejet/valve/position", "teejet/valve/voltage", "teejet/gateway/status")))
+    end = time.monotonic() + 30
+    while True:
+        so_far, _ = run.read_mcap(run.path("late.mcap"), "--allow-incomplete", expect=None)
+        if has_state(so_far) or time.monotonic() >= end:
+            break
+        time.sleep(0.2)
+    check(run.stop(recorder) == 0, "teejet-record did not exit 0 after SIGINT")
+    # --duration ends a recording by itself, with a complete file.
+    timed = run.start("timed-recorder", [run.binary("tools/teejet-record/teejet-record"), "-o",
+                                         run.path("timed.mcap"), "--duration", "0.5"])
+    check(timed.wait(timeout=30) == 0, "teejet-record --duration 0.5 did not exit 0")
+    info = json.loads(run.run([run.binary("tools/teejet-record/teejet-record"), "--info",
+                               run.path("timed.mcap"), "--json"]).stdout)
+    check(info["complete"], f"late: the --duration recording is not complete: {info}")
+    run.stop(gateway, signal.SIGTERM)
+    messages, _ = run.read_mcap(run.path("late.mcap"))
+    early = [m for m in messages if int(m["publish_time"]) < started_ns]
     # Published once, when the valves came up: only a late joiner's copy of the writer's
     # history can bring it. (Presence comes again with each I'm Here.)
     check(serials(early, "teejet/valve/version") == {1, 2, 3, 4},

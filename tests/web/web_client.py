@@ -73,13 +73,16 @@ class WebSocket:
     def send(self, text):
         self.sock.sendall(self.frame(text))
 
-    def answer(self, text):
-        """Sends `text` and returns the answer, skipping the updates in between."""
+    def answer(self, text, deadline_s=20):
+        """Sends `text` and returns the answer, skipping the updates in between (they keep
+        coming, so each receive() is quick: only the deadline ends the wait)."""
         self.send(text)
-        while True:
+        end = time.monotonic() + deadline_s
+        while time.monotonic() < end:
             message = self.receive()
             if message["type"] in ("sent", "refused"):
                 return message
+        raise Failure(f"no answer to {text[:60]} within {deadline_s} s")
 
 
 def http_get(port, path, method="GET"):
