@@ -27,8 +27,6 @@ using teejet::testing::test_domain;
 using Ecu = teejet::testing::DdsPeer;
 using Clock = std::chrono::steady_clock;
 
-constexpr auto kOfflineAfter = 1500ms;  // fixture::sim_config's offline_after
-
 using fixture::make_gateway;
 using fixture::sim_config;
 using teejet::testing::move_to;
@@ -88,7 +86,6 @@ TEST_F(ValveFaultsE2E, AValveSilentMidMoveEndsItsCommandAndComesBackAsTheSameIns
   const auto ended_after = Clock::now() - off_at;
   ASSERT_EQ(Ecu::states(statuses), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
   EXPECT_EQ(statuses.back().reason().to_string(), "valve TJV000003 went offline");
-  EXPECT_LE(ended_after, kOfflineAfter + 500ms);
   ASSERT_TRUE(presence_becomes(3, [](const ValvePresence& p) { return !p.online(); }));
   std::printf("[ measured ] e2e silent valve: TIMED_OUT at the ECU %lld ms after power-off\n",
               ms(ended_after));

@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -232,13 +233,16 @@ TEST_F(ValvectlEndToEnd, CommandReadersMustAcknowledgeBeforeValvectlExits) {
 
 TEST_F(ValvectlEndToEnd, UnknownSerialExits2WithoutWaitingTheWholeTimeout) {
   const auto ignored_before = commands_ignored();
-  const auto unknown = valvectl({"--timeout", "10", "move", "123", "--to", "10"});
+  // Every gateway had told all it knows: no need to wait for the timeout. One far beyond the
+  // 30 s this test gives valvectl tells the two apart without timing it.
+  const auto unknown = valvectl({"--timeout", "3600", "move", "123", "--to", "10"});
+  EXPECT_FALSE(unknown.timed_out) << "valvectl waited for its --timeout";
   EXPECT_EQ(unknown.exit_code, kExitNotFound) << describe(unknown);
   EXPECT_TRUE(contains(unknown.err,
                        "valve TJV000123 is not known to any gateway on domain " + domain_text()))
       << describe(unknown);
-  // Every gateway had told all it knows: no need to wait for the timeout.
-  EXPECT_LT(unknown.took, 9s) << describe(unknown);
+  std::printf("[ measured ] valvectl: an unknown serial refused after %lld ms\n",
+              static_cast<long long>(unknown.took.count()));
   // Nothing was written: a command for an unknown serial would show as ignored by the gateway.
   EXPECT_EQ(commands_ignored(), ignored_before);
 }

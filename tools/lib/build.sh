@@ -36,6 +36,18 @@ tj_now_us() {
   printf '%s\n' "${EPOCHREALTIME//[!0-9]/}"
 }
 
+# CPU time (user + system, milliseconds) of every child process this shell has waited for, and of
+# their children that they waited for: the difference across a step is what the step cost the
+# machine, whatever else shared it. (/proc/PID/stat after the command name: the children's user
+# and system clock ticks are the 14th and 15th fields.)
+tj_cpu_ms() {
+  local stat
+  stat=$(<"/proc/$$/stat")
+  stat=${stat##*) }
+  awk -v fields="$stat" -v hz="$(getconf CLK_TCK)" \
+    'BEGIN { split(fields, f, " "); printf "%d\n", (f[14] + f[15]) * 1000 / hz }'
+}
+
 # Seconds, with one decimal, between two tj_now_us values.
 tj_elapsed() {
   local us=$(($2 - $1))
