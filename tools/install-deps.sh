@@ -70,6 +70,8 @@ PACKAGES=(
   util-linux
   # formatting
   clang-format
+  # tools/test compiles through it: a second run of the suite recompiles only what changed
+  ccache
   # DDS-Security material (tools/pki): the openssl command line
   openssl
   # (Node and npm for tests/mcap-js: see NODE_PACKAGES below)

@@ -15,9 +15,16 @@ tj_install_deps() {
   "$REPO_ROOT/tools/install-deps.sh"
 }
 
-# tj_configure [PRESET [DIR]]: defaults $PRESET and $BUILD_DIR.
+# tj_configure [PRESET [DIR]]: defaults $PRESET and $BUILD_DIR. With TEEJET_CCACHE=1 (tools/test
+# sets it when ccache is installed) every compile goes through ccache; CCACHE_BASEDIR makes the
+# cache's keys relative to the checkout, so a fresh clone elsewhere reuses what another compiled.
 tj_configure() {
-  cmake --preset "${1:-$PRESET}" -B "${2:-$BUILD_DIR}"
+  local launcher=()
+  if [[ "${TEEJET_CCACHE:-0}" == 1 ]]; then
+    export CCACHE_BASEDIR="$REPO_ROOT"
+    launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  fi
+  cmake --preset "${1:-$PRESET}" -B "${2:-$BUILD_DIR}" "${launcher[@]}"
 }
 
 # tj_build [DIR [TARGET...]]: defaults $BUILD_DIR and every target.
