@@ -266,5 +266,14 @@ TEST(DdsDuration, TimeoutsBecomeSecondsAndNanosecondsClampedToWhatFastDdsHolds) 
   EXPECT_EQ(far.nanosec, 0u);
 }
 
+TEST(DdsTime, UnixNanosecondsBecomeTheSourceTimestampOfAWrite) {
+  const auto stamp = to_dds_time(1'764'158'400'123'456'789);  // 2025-11-26 12:00:00.123456789
+  EXPECT_EQ(stamp.seconds, 1'764'158'400);
+  EXPECT_EQ(stamp.nanosec, 123'456'789u);
+  EXPECT_EQ(stamp.to_ns(), 1'764'158'400'123'456'789);
+  EXPECT_EQ(to_dds_time(0).to_ns(), 0);
+  EXPECT_EQ(to_dds_time(~std::uint64_t{0}).seconds, 0x7FFFFFFF);  // past 2038: the largest
+}
+
 }  // namespace
 }  // namespace teejet::dds

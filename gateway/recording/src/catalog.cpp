@@ -77,11 +77,6 @@ std::uint64_t to_ns(const eprosima::fastrtps::rtps::Time_t& time) {
   return ns > 0 ? static_cast<std::uint64_t>(ns) : 0;
 }
 
-eprosima::fastrtps::Time_t from_ns(std::uint64_t ns) {
-  return eprosima::fastrtps::Time_t(static_cast<std::int32_t>(ns / 1'000'000'000),
-                                    static_cast<std::uint32_t>(ns % 1'000'000'000));
-}
-
 Error dds_error(const std::string& what, const ReturnCode_t& code) {
   return Error{ErrorCode::kDds,
                what + " (Fast DDS return code " + std::to_string(static_cast<int>(code())) + ")"};
@@ -128,7 +123,7 @@ class TypedWriter final : public TopicWriter {
   Status write(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    const auto code = writer_->write_w_timestamp(&sample, HANDLE_NIL, from_ns(source_ns));
+    const auto code = writer_->write_w_timestamp(&sample, HANDLE_NIL, dds::to_dds_time(source_ns));
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("write refused", code);
     return {};
   }
@@ -136,7 +131,8 @@ class TypedWriter final : public TopicWriter {
   Status dispose(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    const auto code = writer_->dispose_w_timestamp(&sample, HANDLE_NIL, from_ns(source_ns));
+    const auto code =
+        writer_->dispose_w_timestamp(&sample, HANDLE_NIL, dds::to_dds_time(source_ns));
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("dispose refused", code);
     return {};
   }

@@ -5,6 +5,7 @@
 #include <atomic>
 
 #include "teejet/bus_frame/bus_frame.hpp"
+#include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::dds {
@@ -32,10 +33,8 @@ void FramePublisher::on_frame(const codec::CanFrame& frame, can::FrameDirection 
       frame, gateway_, can_interface_,
       direction == can::FrameDirection::kSent ? FRAME_SENT : FRAME_RECEIVED,
       unix_nanoseconds(stamp));
-  const std::uint64_t ns = sample.stamp_ns();
-  const eprosima::fastrtps::Time_t source(static_cast<std::int32_t>(ns / 1'000'000'000),
-                                          static_cast<std::uint32_t>(ns % 1'000'000'000));
-  const auto result = writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, source);
+  const auto result =
+      writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, to_dds_time(sample.stamp_ns()));
   if (result == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) return;
   // Best effort loses frames under load by design; a write that fails says something is wrong
   // with the writer itself. Once, then every thousandth, so that a full bus never floods the log.

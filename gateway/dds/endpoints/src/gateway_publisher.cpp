@@ -4,6 +4,8 @@
 
 #include <atomic>
 
+#include "teejet/dds/participant.hpp"
+
 namespace teejet::dds {
 
 using namespace eprosima::fastdds::dds;
@@ -24,9 +26,7 @@ void report(DataWriter* writer, const ReturnCode_t& result) {
 // Samples carry the CAN receive time as their DDS source timestamp too.
 template <class Sample>
 void write_stamped(DataWriter* writer, Sample sample, std::uint64_t stamp_ns) {
-  const eprosima::fastrtps::Time_t stamp(static_cast<std::int32_t>(stamp_ns / 1'000'000'000),
-                                         static_cast<std::uint32_t>(stamp_ns % 1'000'000'000));
-  report(writer, writer->write_w_timestamp(&sample, HANDLE_NIL, stamp));
+  report(writer, writer->write_w_timestamp(&sample, HANDLE_NIL, to_dds_time(stamp_ns)));
 }
 
 template <class Sample>

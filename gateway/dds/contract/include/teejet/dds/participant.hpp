@@ -48,6 +48,14 @@ inline eprosima::fastrtps::Duration_t to_dds_duration(std::chrono::nanoseconds t
           static_cast<std::uint32_t>((left - whole).count())};
 }
 
+// Nanoseconds since the Unix epoch as a DDS timestamp (the source timestamp of a write);
+// beyond Time_t's seconds its largest.
+inline eprosima::fastrtps::Time_t to_dds_time(std::uint64_t unix_ns) {
+  constexpr std::uint64_t kSecond = 1'000'000'000;
+  return {static_cast<std::int32_t>(std::min<std::uint64_t>(unix_ns / kSecond, 0x7FFFFFFF)),
+          static_cast<std::uint32_t>(unix_ns % kSecond)};
+}
+
 class Participant {
  public:
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
