@@ -24,25 +24,18 @@ while [ $# -gt 0 ]; do
 done
 
 work=$(mktemp -d /tmp/teejet-test-timings.XXXXXX)
-busy=()
-stop_busy() { [ ${#busy[@]} -eq 0 ] || kill "${busy[@]}" 2>/dev/null; wait "${busy[@]}" 2>/dev/null; busy=(); }
-trap 'stop_busy; rm -rf "$work"' EXIT
+trap 'rm -rf "$work"' EXIT
 failed=0
 for run in $(seq 1 "$runs"); do
   for load in none busy; do
-    if [ "$load" = busy ]; then
-      for _ in $(seq "$(nproc)"); do
-        sh -c 'while :; do :; done' &
-        busy+=($!)
-      done
-    fi
+    added=()
+    [ "$load" = busy ] && added=("$here/warm-cores" --load)
     echo "run $run, added_load=$load, load average $(cut -d' ' -f1-3 /proc/loadavg)" >&2
-    ctest --test-dir "$build" -V -R "$tests" >"$work/$load.$run.log" 2>&1 || {
+    "${added[@]}" ctest --test-dir "$build" -V -R "$tests" >"$work/$load.$run.log" 2>&1 || {
       echo "run-test-timings: a test failed (run $run, added_load=$load):" >&2
       grep -E "\*\*\*(Failed|Timeout)|Exception" "$work/$load.$run.log" >&2
       failed=1
     }
-    stop_busy
   done
 done
 
