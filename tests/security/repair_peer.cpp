@@ -27,7 +27,6 @@
 namespace {
 
 using namespace eprosima::fastdds::dds;
-using Positions = teejet::dds::topics::TopicOf<teejet::ValvePosition>;
 
 class MatchPrinter final : public DataWriterListener {
  public:
@@ -95,7 +94,7 @@ int main(int argc, char** argv) {
   auto participant =
       teejet::dds::Participant::create({.profile_file = argv[1], .name = "repair-peer-" + mode});
   if (!participant) return refused(participant.error());
-  auto topic = (*participant)->topic<Positions::PubSubType>(Positions::kName);
+  auto topic = teejet::dds::topics::topic_of<teejet::ValvePosition>(**participant);
   if (!topic) return refused(topic.error());
   const int count = std::atoi(argv[3]);
   return mode == "write" ? write(**participant, *topic, count) : read(**participant, *topic, count);
