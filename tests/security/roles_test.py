@@ -35,7 +35,9 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "web"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 import web_client  # noqa: E402 (tests/web)
+from waiting import Timeout, first, latest  # noqa: E402 (tests/support)
 
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
 # How long a refused participant looks for the gateway (it starts once a granted one has found
@@ -186,13 +188,14 @@ class Suite:
         the last run and its positions by serial. A move reports COMPLETED within the gateway's
         tolerance (1 degree) and the valve comes to rest on its target a moment later, so an
         exact position is a condition to wait for, not to read once."""
-        end = time.monotonic() + deadline_s
-        while True:
-            listing = self.valvectl(profile, "--json", "list", "--wait-for", "4",
-                                    timeout=max(1, min(20, end - time.monotonic())))
-            positions = self.positions(listing.stdout) if listing.returncode == 0 else {}
-            if until(positions) or time.monotonic() >= end:
-                return listing, positions
+        end = time.monotonic() + deadline_s  # each run's --timeout ends with the wait
+
+        def listing():
+            run = self.valvectl(profile, "--json", "list", "--wait-for", "4",
+                                timeout=max(1, min(20, end - time.monotonic())))
+            return run, self.positions(run.stdout) if run.returncode == 0 else {}
+
+        return latest(listing, deadline_s, ok=lambda seen: until(seen[1]), interval=0)
 
     def check(self, name, condition, detail):
         print(f"{'ok  ' if condition else 'FAIL'} {name}" + ("" if condition else f": {detail}"),
@@ -260,10 +263,10 @@ class Suite:
         holds; positions by serial."""
         def positions_of(listed):
             return {row["serial"]: row["position"] for row in listed}
-        rows = web_client.valves_when(
-            port, lambda listed: sorted(row["serial"] for row in listed) == SERIALS
-            and all(row["position"] is not None for row in listed) and until(positions_of(listed)),
-            deadline_s)
+        rows = latest(
+            lambda: web_client.valves(port), deadline_s,
+            ok=lambda listed: sorted(row["serial"] for row in listed) == SERIALS
+            and all(row["position"] is not None for row in listed) and until(positions_of(listed)))
         return positions_of(rows)
 
     def web_move(self, port, serial, degrees):
@@ -275,13 +278,17 @@ class Suite:
                              deadline_s=20)
         commands = answer.get("commands") or [{}]
         command_id = commands[0].get("command_id")
-        end = time.monotonic() + 20
-        while command_id is not None and time.monotonic() < end:
+        if command_id is None:
+            return answer, None
+
+        def final_state():
             message = page.receive()
             for status in message.get("statuses", []) if message["type"] == "update" else []:
                 if status["command_id"] == command_id and status["state"] != "accepted":
-                    return answer, status["state"]
-        return answer, None
+                    return status["state"]
+            return None
+
+        return answer, first(final_state, 20, interval=0)
 
     def web_cases(self):
         observer_log = self.start_web(self.profiles["watcher"], 18181)
@@ -323,7 +330,8 @@ class Suite:
             env=self.env_for(self.profiles["gw"], "vehicle"), log=self.gateway_log)
         try:
             self.cases()
-        except (web_client.Failure, subprocess.TimeoutExpired, OSError, ValueError) as error:
+        except (web_client.Failure, Timeout, subprocess.TimeoutExpired, OSError,
+                ValueError) as error:
             self.check("the cases ran to their end", False, f"{type(error).__name__}: {error}")
 
         self.check("the gateway is still running", gateway.poll() is None,

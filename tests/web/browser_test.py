@@ -29,6 +29,9 @@ import tempfile
 import time
 import urllib.request
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from waiting import Timeout, eventually  # noqa: E402 (tests/support)
+
 COMMANDS_PORT = 18180
 READONLY_PORT = 18181
 TOKEN_PORT = 18182
@@ -39,10 +42,9 @@ READ_ONLY_REASON = ("commands are disabled: teejet-web runs read-only (start it 
 
 try:
     from selenium import webdriver
-    from selenium.common.exceptions import TimeoutException
     from selenium.webdriver.chrome.service import Service
     from selenium.webdriver.common.by import By
-    from selenium.webdriver.support.ui import Select, WebDriverWait
+    from selenium.webdriver.support.ui import Select
 except ImportError:
     print("SKIP: python3-selenium is not installed (tools/install-deps.sh)")
     sys.exit(77)
@@ -57,31 +59,18 @@ def check(condition, message):
         raise Failure(message)
 
 
-def wait_for(driver, seconds, what, probe, ok):
-    """Polls probe() until ok(value); on timeout fails naming `what` and the last value seen."""
-    seen = [None]
-
-    def ready(_):
-        seen[0] = probe()
-        return ok(seen[0])
-
-    try:
-        WebDriverWait(driver, seconds, poll_frequency=0.05).until(ready)
-    except TimeoutException:
-        raise Failure(f"{what} not within {seconds} s; last seen: {seen[0]!r}") from None
-    return seen[0]
-
-
 def wait_for_server(port, process, seconds):
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        check(process.poll() is None, f"teejet-web on {port} exited {process.returncode}")
+    def answer():
         try:
             with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/valves", timeout=2):
-                return
-        except OSError:
-            time.sleep(0.05)  # not listening yet: the next try is the condition
-    raise Failure(f"teejet-web on port {port} did not answer within {seconds} s")
+                return "answered"
+        except OSError as error:  # not listening yet: the next try is the condition
+            return str(error)
+
+    eventually(answer, seconds, f"an answer of teejet-web on port {port}",
+               ok=lambda seen: seen == "answered",
+               alive=lambda: check(process.poll() is None,
+                                   f"teejet-web on {port} exited {process.returncode}"))
 
 
 CARDS_JS = """
@@ -105,10 +94,10 @@ def card(driver, serial):
 
 def open_page(driver, port):
     driver.get(f"http://127.0.0.1:{port}/")
-    wait_for(driver, 15, "4 online cards TJV000001..TJV000004 and a connected page",
-             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
-                      [(c["serial"], c["online"]) for c in cards(driver)]),
-             lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
+    eventually(lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                        [(c["serial"], c["online"]) for c in cards(driver)]),
+               15, "4 online cards TJV000001..TJV000004 and a connected page",
+               ok=lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
 
 
 def degrees(text):
@@ -138,20 +127,21 @@ def commanding_page(driver, artifacts, screenshot):
     Select(target.find_element(By.CSS_SELECTOR, ".move-direction")).select_by_value("shortest")
     frames_before = driver.execute_script("return window.teejetDashboard.stats.frames_painted")
     target.find_element(By.CSS_SELECTOR, ".move-send").click()
-    final = wait_for(driver, 30, "a final status of the move in TJV000002's status line",
-                     lambda: card(driver, "TJV000002"), lambda c: c["final"] == "true")
+    final = eventually(lambda: card(driver, "TJV000002"), 30,
+                       "a final status of the move in TJV000002's status line",
+                       ok=lambda c: c["final"] == "true")
     check(final["state"] == "completed" and "completed" in final["status"],
           f"TJV000002's status line: {final['status']!r} (state {final['state']}), not completed")
     check(final["status"].startswith("target_degrees #"),
           f"status line {final['status']!r} does not name the target_degrees command")
-    moved = wait_for(driver, 10, "TJV000002's dial at 90 +- 1 (reading and needle)",
-                     lambda: card(driver, "TJV000002"),
-                     lambda c: (degrees(c["position"]) is not None and c["needle"] is not None
-                                and abs(degrees(c["position"]) - 90) <= 1
-                                and abs(float(c["needle"]) - 90) <= 1))
+    moved = eventually(lambda: card(driver, "TJV000002"), 10,
+                       "TJV000002's dial at 90 +- 1 (reading and needle)",
+                       ok=lambda c: (degrees(c["position"]) is not None and c["needle"] is not None
+                                     and abs(degrees(c["position"]) - 90) <= 1
+                                     and abs(float(c["needle"]) - 90) <= 1))
     # The simulated valve then comes to rest on its target; (c) watches it stay there.
-    wait_for(driver, 10, "TJV000002 at rest on 90.0", lambda: card(driver, "TJV000002"),
-             lambda c: c["position"] == "90.0°" and c["needle"] == "90")
+    eventually(lambda: card(driver, "TJV000002"), 10, "TJV000002 at rest on 90.0",
+               ok=lambda c: c["position"] == "90.0°" and c["needle"] == "90")
     others = [c for c in cards(driver) if c["serial"] != "TJV000002" and c["state"] is not None]
     check(not others, f"a status line on a valve that was not commanded: {others}")
     print(f"(b) move to 90 completed: status {final['status']!r}, dial {moved['position']}, "
@@ -159,9 +149,9 @@ def commanding_page(driver, artifacts, screenshot):
 
     # The plot has painted the movement, on its shortest window, before the picture is taken.
     Select(driver.find_element(By.ID, "plot-window")).select_by_value("60")
-    wait_for(driver, 5, "a plot repaint after the move",
-             lambda: driver.execute_script("return window.teejetDashboard.stats"),
-             lambda s: s["frames_painted"] > frames_before + 1)
+    eventually(lambda: driver.execute_script("return window.teejetDashboard.stats"), 5,
+               "a plot repaint after the move",
+               ok=lambda s: s["frames_painted"] > frames_before + 1)
     stats = driver.execute_script("return window.teejetDashboard.stats")
     for key in ("messages", "updates_per_s", "valve_updates", "valve_updates_per_s",
                 "last_message_ms", "frames_painted"):
@@ -206,9 +196,8 @@ def read_only_page(driver):
     # with new gateway counters (a poll of the valves, about once a second) or a changed valve,
     # so that is over a second of polls: enough for a sent move to start turning it.
     messages = driver.execute_script("return window.teejetDashboard.stats.messages")
-    wait_for(driver, 15, "3 more messages on the read-only page",
-             lambda: driver.execute_script("return window.teejetDashboard.stats.messages"),
-             lambda n: n >= messages + 3)
+    eventually(lambda: driver.execute_script("return window.teejetDashboard.stats.messages"), 15,
+               "3 more messages on the read-only page", ok=lambda n: n >= messages + 3)
     after = card(driver, "TJV000002")
     check(after["position"] == before["position"] and after["needle"] == before["needle"],
           f"TJV000002 moved on a read-only page: {before['position']} -> {after['position']}")
@@ -223,15 +212,16 @@ def token_page(driver):
     check(driver.find_elements(By.ID, "token"), "no token field on a page that needs one")
     stop = driver.find_element(By.CSS_SELECTOR, '.card[data-serial="TJV000003"] .stop')
     stop.click()
-    refused = wait_for(driver, 10, "TJV000003's Stop without a token answered",
-                       lambda: card(driver, "TJV000003"), lambda c: c["state"] == "refused")
+    refused = eventually(lambda: card(driver, "TJV000003"), 10,
+                         "TJV000003's Stop without a token answered",
+                         ok=lambda c: c["state"] == "refused")
     check(refused["status"] == 'refused: missing or wrong "token"',
           f"status line of a Stop without the token: {refused['status']!r}")
     driver.find_element(By.ID, "token").send_keys(TOKEN)
     stop.click()
-    sent = wait_for(driver, 15, "TJV000003's Stop with the token reaching the gateway",
-                    lambda: card(driver, "TJV000003"),
-                    lambda c: c["state"] not in ("refused", "sent", None))
+    sent = eventually(lambda: card(driver, "TJV000003"), 15,
+                      "TJV000003's Stop with the token reaching the gateway",
+                      ok=lambda c: c["state"] not in ("refused", "sent", None))
     check(sent["status"].startswith("stop #"), f"status line of a Stop with the token: "
                                                 f"{sent['status']!r} ({sent['state']})")
     print(f"(f) token: refused without it, {sent['status']!r} with it")
@@ -240,16 +230,16 @@ def token_page(driver):
 def reconnects(driver, restart):
     """The page shows that its server went away, and comes back by itself when it returns."""
     stopped = restart.stop()
-    wait_for(driver, 10, "the connection badge saying reconnecting",
-             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
-                      driver.find_element(By.ID, "connection").text),
-             lambda seen: seen[0] == "reconnecting" and seen[1].startswith("reconnecting in"))
+    eventually(lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                        driver.find_element(By.ID, "connection").text),
+               10, "the connection badge saying reconnecting",
+               ok=lambda seen: seen[0] == "reconnecting" and seen[1].startswith("reconnecting in"))
     check(stopped == 0, f"the read-only teejet-web exited {stopped} after SIGTERM")
     restart.start()
-    wait_for(driver, 20, "the page connected again with 4 online cards",
-             lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
-                      [(c["serial"], c["online"]) for c in cards(driver)]),
-             lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
+    eventually(lambda: (driver.find_element(By.ID, "connection").get_attribute("data-state"),
+                        [(c["serial"], c["online"]) for c in cards(driver)]),
+               20, "the page connected again with 4 online cards",
+               ok=lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
     print("(e) the page showed reconnecting while teejet-web was down, and came back by itself")
 
 
@@ -335,7 +325,7 @@ def main():
         reconnects(driver, read_only)
         wait_for_server(TOKEN_PORT, with_token, 15)
         token_page(driver)
-    except Failure as failure:
+    except (Failure, Timeout) as failure:
         print(f"FAIL: {failure}")
         if driver:
             path = os.path.join(args.artifacts, "web-dashboard-failure.png")

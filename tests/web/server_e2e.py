@@ -31,6 +31,9 @@ import time
 import web_client
 from web_client import Failure
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from waiting import Timeout, eventually  # noqa: E402 (tests/support)
+
 PORT = 18080
 TICK_S = 0.040
 MAX_PAGES = 48  # kMaxPages of server.cpp
@@ -51,10 +54,12 @@ def get(path, method="GET"):
 
 
 def wait_for_valves(web, count, deadline_s):
-    valves = web_client.valves_when(PORT, lambda listed: len(listed) >= count, deadline_s, web)
-    check(len(valves) >= count,
-          f"/api/valves listed {len(valves)} valves, not {count}, within {deadline_s} s")
-    return valves
+    def running():
+        check(web.poll() is None, f"teejet-web exited {web.returncode}")
+
+    return eventually(lambda: web_client.valves(PORT), deadline_s,
+                      f"{count} valves listed on /api/valves",
+                      ok=lambda listed: len(listed) >= count, alive=running)
 
 
 def readonly():
@@ -121,13 +126,18 @@ def commands():
     # valve then comes to rest on its target, and the page must see that too.
     check(position is not None and abs(position - 90.0) <= 1.0,
           f"position at completed: {position}")
-    end = time.monotonic() + 5
-    while position != 90.0 and time.monotonic() < end:
+
+    def position_now():
+        nonlocal position
         message = page.receive()
         for valve in message.get("valves", []) if message["type"] == "update" else []:
             if valve["serial"] == "TJV000001":
                 position = valve["position"]
-    check(position == 90.0, f"position 5 s after completed: {position}")
+        return position
+
+    if position != 90.0:
+        eventually(position_now, 5, "TJV000001 at rest on 90.0 after completed",
+                   ok=lambda seen: seen == 90.0, interval=0)
     check(90.0 in targets and targets[-1] is None, f"targets shown: {targets}")
     limit = int(elapsed / TICK_S) + 2
     check(updates <= limit, f"{updates} updates in {elapsed:.2f} s: more than one per tick")
@@ -151,15 +161,16 @@ def pages():
     check(extra.status != SWITCHING, f"page {MAX_PAGES + 1} was accepted")
     extra.sock.close()
     open_pages.pop().sock.close()
-    # The server notices the closed page on its own thread: try again until it has.
-    end = time.monotonic() + 5
-    while True:
+
+    def new_page():
         page = WebSocket()
-        if page.status == SWITCHING:
-            break
-        page.sock.close()
-        check(time.monotonic() < end, f"no new page within 5 s after one closed: {page.status!r}")
-        time.sleep(0.05)
+        if page.status != SWITCHING:
+            page.sock.close()
+        return page
+
+    # The server notices the closed page on its own thread: try again until it has.
+    page = eventually(new_page, 5, "a new page after one closed",
+                      ok=lambda page: page.status == SWITCHING)
     check(page.receive()["type"] == "snapshot", "the page that got in had no snapshot")
     print(f"{MAX_PAGES} pages served, the next refused ({extra.status!r}), a free place reused")
 
@@ -171,13 +182,15 @@ def move_completes(page, serial, degrees, seconds):
     check(answer["type"] == "sent" and "command_id" in answer["commands"][0], f"move: {answer}")
     command_id = answer["commands"][0]["command_id"]
     states = []
-    end = time.monotonic() + seconds
-    while "completed" not in states:
-        check(time.monotonic() < end, f"move of {serial} not completed within {seconds} s: "
-                                      f"statuses {states}")
+
+    def statuses():
         message = page.receive()
         if message["type"] == "update":
-            states += [s["state"] for s in message["statuses"] if s["command_id"] == command_id]
+            states.extend(s["state"] for s in message["statuses"] if s["command_id"] == command_id)
+        return states
+
+    eventually(statuses, seconds, f"the completion of the move of {serial} (its statuses)",
+               ok=lambda seen: "completed" in seen, interval=0)
     check(states == ["accepted", "completed"], f"statuses: {states}")
 
 
@@ -190,10 +203,8 @@ def slowpage():
     # server stops reading, and this would block.
     flood = web_client.WebSocket.frame('{"command":"stop","serial":"TJV000099"}') * 100000
     threading.Thread(target=slow.sock.sendall, args=(flood,), daemon=True).start()
-    end = time.monotonic() + 15
-    while "a page stopped reading" not in open(WEB_LOG).read():
-        check(time.monotonic() < end, "the page that does not read was not dropped within 15 s")
-        time.sleep(0.05)
+    eventually(lambda: "a page stopped reading" in open(WEB_LOG).read(), 15,
+               "the page that does not read dropped ('a page stopped reading' in teejet-web's log)")
     page = WebSocket()
     check(page.receive()["type"] == "snapshot", "the second page had no snapshot")
     move_completes(page, "TJV000001", 90, 10)
@@ -220,7 +231,7 @@ def main():
     try:
         {"readonly": readonly, "commands": commands, "pages": pages,
          "slowpage": slowpage}[args.case]()
-    except Failure as failure:
+    except (Failure, Timeout) as failure:
         print(f"FAIL: {failure}")
         print(open(web_log_path).read())
         return 1

@@ -6,9 +6,12 @@ import json
 import os
 import socket
 import struct
-import time
+import sys
 import urllib.error
 import urllib.request
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from waiting import eventually  # noqa: E402 (tests/support)
 
 
 class Failure(Exception):
@@ -37,6 +40,9 @@ class WebSocket:
                 break
             head += chunk
         self.status = head.split(b"\r\n")[0].decode()
+
+    def __repr__(self):
+        return f"<WebSocket {self.status!r}>"
 
     def _exact(self, n):
         data = b""
@@ -77,12 +83,8 @@ class WebSocket:
         """Sends `text` and returns the answer, skipping the updates in between (they keep
         coming, so each receive() is quick: only the deadline ends the wait)."""
         self.send(text)
-        end = time.monotonic() + deadline_s
-        while time.monotonic() < end:
-            message = self.receive()
-            if message["type"] in ("sent", "refused"):
-                return message
-        raise Failure(f"no answer to {text[:60]} within {deadline_s} s")
+        return eventually(self.receive, deadline_s, f"an answer to {text[:60]}",
+                          ok=lambda message: message["type"] in ("sent", "refused"), interval=0)
 
 
 def http_get(port, path, method="GET"):
@@ -94,18 +96,10 @@ def http_get(port, path, method="GET"):
         return error.code, ""
 
 
-def valves_when(port, until, deadline_s, process=None):
-    """GET /api/valves until `until(listing)` holds or `deadline_s` passes: the last listing
-    (empty while the server does not answer yet). Fails at once when `process` exited."""
-    end = time.monotonic() + deadline_s
-    while True:
-        if process is not None and process.poll() is not None:
-            raise Failure(f"teejet-web exited {process.returncode}")
-        try:
-            status, body = http_get(port, "/api/valves")
-            valves = json.loads(body) if status == 200 else []
-        except OSError:  # not listening yet
-            valves = []
-        if until(valves) or time.monotonic() >= end:
-            return valves
-        time.sleep(0.05)
+def valves(port):
+    """GET /api/valves: the listing, empty while the server does not answer yet."""
+    try:
+        status, body = http_get(port, "/api/valves")
+    except OSError:  # not listening yet
+        return []
+    return json.loads(body) if status == 200 else []
