@@ -16,7 +16,9 @@ import subprocess
 import sys
 import tempfile
 import threading
-import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from waiting import first  # noqa: E402 (tests/support)
 
 VALVES = 3000
 TAKEN = 1000
@@ -31,30 +33,25 @@ class Writer:
                                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                         text=True)
         self.lines = []
-        self.changed = threading.Condition()
+        self.lock = threading.Lock()
         threading.Thread(target=self._collect, daemon=True).start()
 
     def _collect(self):
         for line in self.process.stdout:
-            with self.changed:
+            with self.lock:
                 self.lines.append(line.rstrip("\n"))
-                self.changed.notify_all()
-        with self.changed:
-            self.changed.notify_all()
 
     def wait_for(self, predicate, deadline_s):
         """True once predicate(lines) holds; False when the deadline passes or the writer ends."""
-        end = time.monotonic() + deadline_s
-        with self.changed:
-            while not predicate(self.lines):
-                left = end - time.monotonic()
-                if left <= 0 or self.process.poll() is not None:
-                    return predicate(self.lines)
-                self.changed.wait(min(left, 0.5))
-            return True
+        def holds():
+            with self.lock:
+                return predicate(self.lines)
+
+        first(lambda: holds() or self.process.poll() is not None, deadline_s)
+        return holds()
 
     def output(self):
-        with self.changed:
+        with self.lock:
             return "\n".join(self.lines)
 
 
