@@ -21,12 +21,14 @@ import argparse
 import json
 import os
 import re
-import select
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from waiting import Timeout, eventually, first  # noqa: E402 (tests/support)
 
 
 class Failure(Exception):
@@ -38,18 +40,20 @@ def check(condition, message):
         raise Failure(message)
 
 
-def wait_for_line(path, text, deadline_s, proc=None):
-    """Until `text` appears in the file at `path`, or fail."""
-    end = time.monotonic() + deadline_s
-    while time.monotonic() < end:
-        if os.path.exists(path):
-            with open(path, errors="replace") as f:
-                if text in f.read():
-                    return
-        if proc is not None and proc.poll() is not None:
-            raise Failure(f"{proc.args[0]} exited {proc.returncode} before saying '{text}'")
-        time.sleep(0.02)
-    raise Failure(f"no '{text}' in {path} within {deadline_s} s")
+def wait_for_line(path, text, deadline_s, proc):
+    """Until `text` appears in the file at `path`, or fail (at once when `proc` exited)."""
+    def written():
+        if not os.path.exists(path):
+            return ""
+        with open(path, errors="replace") as f:
+            return f.read()
+
+    def running():
+        check(proc.poll() is None,
+              f"{proc.args[0]} exited {proc.returncode} before saying '{text}'")
+
+    eventually(written, deadline_s, f"'{text}' in {path}", ok=lambda seen: text in seen,
+               interval=0.02, alive=running)
 
 
 class Run:
@@ -300,10 +304,8 @@ def make_recording(run, output, extra=(), valves=4, full_poll=False, until_file=
     settle_ns = time.time_ns()
     run.exercise_valves(command_readers=3)
     if until_file:
-        end = time.monotonic() + 60
-        while not os.path.exists(run.path(until_file)) and time.monotonic() < end:
-            time.sleep(0.1)
-        check(os.path.exists(run.path(until_file)), f"no {until_file} within 60 s")
+        eventually(lambda: os.path.exists(run.path(until_file)), 60, f"a file {until_file}",
+                   interval=0.1)
     check(run.stop(gateway, signal.SIGTERM) == 0, "the gateway did not exit 0")
     check(run.stop(recorder) == 0, "teejet-record did not exit 0 after SIGINT")
     check(run.stop(logger) == 0, "the subscriber did not exit 0")
@@ -368,9 +370,7 @@ def case_sigkill(run):
     run.valvectl("move", "TJV000001", "--to", "80", "--speed", "100", "--wait", "--timeout", "20",
                  "--command-readers", "3")
     # Until the file holds at least two closed chunks and more, then no chance to finish it.
-    end = time.monotonic() + 20
-    while os.path.getsize(recording) < 20_000 and time.monotonic() < end:
-        time.sleep(0.05)
+    first(lambda: os.path.getsize(recording) >= 20_000, 20)
     recorder.send_signal(signal.SIGKILL)
     recorder.wait(timeout=10)
     size = os.path.getsize(recording)
@@ -435,15 +435,14 @@ def case_replay(run):
     replay = run.run([run.binary("tools/teejet-replay/teejet-replay"), recording, "--domain", "1",
                       "--wait-for-readers", "20"], timeout=120)
     summary = check_replay_report(replay.stderr, messages)
+
+    def printed_all():
+        with open(run.path("replayed.jsonl")) as f:
+            return sum(1 for line in f if line.strip()) >= len(messages)
+
     # The replayer waits for reliable readers' acknowledgements, not for the best-effort frames
     # to be taken: until the subscriber printed as many samples, or what it missed shows below.
-    lines = run.path("replayed.jsonl")
-    end = time.monotonic() + 30
-    while time.monotonic() < end:
-        with open(lines) as f:
-            if sum(1 for line in f if line.strip()) >= len(messages):
-                break
-        time.sleep(0.05)
+    first(printed_all, 30)
     check(run.stop(logger) == 0, "the replay subscriber did not exit 0")
     received = run.read_jsonl("replayed.jsonl")
     # Per instance (the order DDS keeps): the same samples in the same order, with the same
@@ -514,18 +513,14 @@ def case_late(run):
     # Until the recording holds what a late joiner must get, read as it grows (chunks close at
     # least once a second): each reader matches the gateway's writer on its own, and at load 10
     # presence had not come within a --duration of 1 s (1 of 10 runs).
-    def has_state(samples):
+    def has_state():
+        samples, _ = run.read_mcap(run.path("late.mcap"), "--allow-incomplete", expect=None)
         return (serials(samples, "teejet/valve/version") == {1, 2, 3, 4} and
                 serials(samples, "teejet/valve/presence") == {1, 2, 3, 4} and
                 serials(samples, "teejet/valve/error") == {3} and
                 all(any(m["topic"] == topic for m in samples) for topic in (
                     "teejet/valve/position", "teejet/valve/voltage", "teejet/gateway/status")))
-    end = time.monotonic() + 30
-    while True:
-        so_far, _ = run.read_mcap(run.path("late.mcap"), "--allow-incomplete", expect=None)
-        if has_state(so_far) or time.monotonic() >= end:
-            break
-        time.sleep(0.2)
+    first(has_state, 30, interval=0.2)
     check(run.stop(recorder) == 0, "teejet-record did not exit 0 after SIGINT")
     # --duration ends a recording by itself, with a complete file.
     timed = run.start("timed-recorder", [run.binary("tools/teejet-record/teejet-record"), "-o",
@@ -572,7 +567,7 @@ def main():
         try:
             {"record": case_record, "sigkill": case_sigkill, "replay": case_replay,
              "split": case_split, "late": case_late}[args.case](run)
-        except (Failure, subprocess.TimeoutExpired) as failure:
+        except (Failure, Timeout, subprocess.TimeoutExpired) as failure:
             print(f"FAIL: {failure}")
             for name in sorted(os.listdir(work)):
                 if name.endswith(".err"):
