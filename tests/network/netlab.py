@@ -23,7 +23,6 @@ import os
 import shlex
 import signal
 import subprocess
-import time
 
 SKIP = 77  # CTest's SKIP_RETURN_CODE for the network tests
 
@@ -176,15 +175,3 @@ class Lab:
             _sh("umount", f"/run/netlab/{host}/shm", check=False)
             _sh("ip", "netns", "del", host, check=False)
         _sh("ip", "link", "del", "br0", check=False)
-
-
-def wait_until(predicate, timeout, interval=0.05):
-    """PREDICATE's first true value before TIMEOUT seconds, else None."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() >= deadline:
-            return None
-        time.sleep(interval)

@@ -10,7 +10,9 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from netlab import SKIP, Lab, LabUnavailable, wait_until  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from netlab import SKIP, Lab, LabUnavailable  # noqa: E402
+from waiting import first  # noqa: E402 (tests/support)
 
 PYTHON = "/usr/bin/python3"
 
@@ -59,7 +61,7 @@ def datagram(lab, sender, receiver, destination, group="-", wait=2.0):
         with open(log) as out:
             return out.read().split("\n")
 
-    if not wait_until(lambda: "ready" in output(), 30):
+    if not first(lambda: "ready" in output(), 30):
         return "the listener never got ready"
     lab.run(sender, [PYTHON, "-c", SEND, destination, "7400", str(int(wait / 0.05))],
             timeout=wait + 30)

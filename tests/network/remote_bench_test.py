@@ -28,8 +28,10 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(HERE, "..", "support"))
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
-from netlab import SKIP, Lab, LabUnavailable, wait_until  # noqa: E402
+from netlab import SKIP, Lab, LabUnavailable  # noqa: E402
+from waiting import first  # noqa: E402 (tests/support)
 
 CONFIG = os.path.join(HERE, "..", "..", "config")
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
@@ -126,7 +128,7 @@ class Bench:
                     counts = re.findall(r"([0-9][0-9,]*) msgs", text.read())
                 return counts and int(counts[-1].replace(",", "")) > 0
 
-            if wait_until(receiving, self.timeout):
+            if first(receiving, self.timeout):
                 say("bench: teejet-record receiving")
                 return recorder
             self.lab.stop(recorder)
