@@ -17,9 +17,11 @@ import time
 
 # sheet.py sits next to this script, whatever the working directory; no __pycache__ in the tree.
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "support"))
 sys.dont_write_bytecode = True
 from sheet import (check, finish, open_bus, print_log_on_failure, send,  # noqa: E402
                    start_valve_sim, stop_valve_sim, tenths, u16)
+from waiting import first  # noqa: E402 (tests/support)
 
 # Telemetry comes every 0.1 s, stamped by the receiving kernel: a report can only come late,
 # so a move cannot seem shorter than the physics allows by more than the clock's grain.
@@ -27,12 +29,12 @@ REACH_TOLERANCE_EARLY = 0.05
 
 
 def wait_for_valve(bus, address, seconds=10.0):
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
+    """True once the valve at `address` announced itself (I'm Here) within `seconds`."""
+    def announced():
         message = bus.recv(timeout=0.2)
-        if message and message.arbitration_id & 0xFF == address and message.data[0] == 0x00:
-            return True
-    return False
+        return message and message.arbitration_id & 0xFF == address and message.data[0] == 0x00
+
+    return first(announced, seconds, interval=0) is not None
 
 
 def track(bus, address, command, target, expected_seconds, wrap=False):

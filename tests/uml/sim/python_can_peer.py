@@ -15,9 +15,11 @@ import time
 
 # sheet.py sits next to this script, whatever the working directory; no __pycache__ in the tree.
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "support"))
 sys.dont_write_bytecode = True
 from sheet import (check, finish, open_bus, print_log_on_failure, send,  # noqa: E402
                    start_valve_sim, stop_valve_sim, tenths, u16, u24, u32)
+from waiting import latest  # noqa: E402 (tests/support)
 
 
 class Peer:
@@ -48,19 +50,9 @@ class Peer:
 
     def reply_when(self, done, address, payload, reply_id, seconds=3.0):
         """Asks every 20 ms until a reply satisfies done(data) or `seconds` pass; returns the
-        last reply (None when none came), for the check to judge and report."""
-        deadline = time.monotonic() + seconds
-        last = None
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return last
-            data = self.reply(address, payload, reply_id, timeout=min(left, 1.0))
-            if data is not None:
-                last = data
-                if done(data):
-                    return data
-            time.sleep(min(0.02, max(0.0, deadline - time.monotonic())))
+        last reply (None when the last ask got none), for the check to judge and report."""
+        return latest(lambda: self.reply(address, payload, reply_id, timeout=1.0), seconds,
+                      ok=lambda data: data is not None and done(data), interval=0.02)
 
     def i_am_here(self, done, seconds):
         """I'm Here frames until done(valves, stamps) holds or `seconds` pass: {serial: (address,
