@@ -59,9 +59,7 @@ class GatewayE2E : public ::testing::Test {
 // A commander as a foreign ECU writes it: its own origin, no valvectl, every status of every
 // command kept (a KEEP_ALL reader taking on Fast DDS's thread, so that it keeps up). A watcher
 // (watcher = true) only reads, keeping the last 32 per valve as the contract's status QoS does;
-// it has no command writer, since each liveliness-announcing participant in one process is one
-// more party to a lock-order deadlock of Fast DDS 2.9.1 (seen once at teardown: two participants'
-// WLP threads delivering liveliness to each other in-process).
+// it has no command writer.
 class Commander final : public eprosima::fastdds::dds::DataReaderListener {
  public:
   explicit Commander(const std::string& name, bool watcher = false) { make(name, watcher); }
