@@ -56,6 +56,14 @@ bool can_sockets_available() {
 }
 
 // CPU time (user + system) of the calling thread.
+// A wait that spins costs about the whole wait in CPU; one that sleeps, a few ticks. The bound
+// is half the wait, not a budget: in user-mode-linux on a loaded host getrusage charges whole
+// 10 ms ticks to whatever runs, and an idle wait was charged 130 ms in 1 s (CI, load 6). The CPU
+// figures are printed as measure lines for bench/run-test-timings.sh.
+constexpr std::chrono::microseconds spinning_above(std::chrono::microseconds wait) {
+  return wait / 2;
+}
+
 std::chrono::microseconds thread_cpu() {
   rusage usage{};
   ::getrusage(RUSAGE_THREAD, &usage);
@@ -391,7 +399,7 @@ TEST_F(SocketCanBench, LinkDownFailsSendsVisiblyIdlesQuietlyAndRecoversWhenUp) {
   const auto waited = SteadyClock::now() - started;
   const auto cpu = thread_cpu() - cpu_before;
   EXPECT_GE(waited, 1s);
-  EXPECT_LT(cpu, 100ms) << "spinning while the link is down";
+  EXPECT_LT(cpu, spinning_above(1s)) << "spinning while the link is down";
   EXPECT_EQ(bus.statistics().state, BusState::kDown);
 
   ASSERT_EQ(link("up"), 0);
@@ -426,7 +434,7 @@ TEST_F(SocketCanBench, DeletedInterfaceIsReopenedWhenItReturns) {
   const auto cpu_before = thread_cpu();
   EXPECT_FALSE(bus.receive(1s));  // reopen attempts with backoff meanwhile, all failing
   const auto cpu = thread_cpu() - cpu_before;
-  EXPECT_LT(cpu, 100ms) << "spinning while the interface is gone";
+  EXPECT_LT(cpu, spinning_above(1s)) << "spinning while the interface is gone";
   EXPECT_EQ(bus.statistics().reopens, 0u);
 
   ASSERT_EQ(create_interface(), 0);
@@ -493,7 +501,7 @@ TEST_F(SocketCanBench, WaitsForAMissingInterfaceAndUsesItOnceCreated) {
   const auto cpu_before = thread_cpu();
   EXPECT_FALSE(bus.receive(1s));
   const auto cpu = thread_cpu() - cpu_before;
-  EXPECT_LT(cpu, 100ms);
+  EXPECT_LT(cpu, spinning_above(1s)) << "spinning while waiting for the interface";
   EXPECT_EQ(bus.statistics().reopens, 0u);
 
   ASSERT_EQ(shell("ip link add dev " + late + " type vcan && ip link set " + late + " up"), 0);
@@ -701,7 +709,7 @@ TEST_F(SocketCanBench, FullDeviceQueueUsesTheBoundedRetryQueue) {
   const auto cpu_before = thread_cpu();
   EXPECT_FALSE(bus.receive(500ms));
   const auto cpu = thread_cpu() - cpu_before;
-  EXPECT_LT(cpu, 100ms) << "spinning on a stuck device queue";
+  EXPECT_LT(cpu, spinning_above(500ms)) << "spinning on a stuck device queue";
 
   ASSERT_EQ(shell("tc qdisc change dev " + interface + " root plug release_indefinite"), 0);
   ASSERT_TRUE(receive_until_stats(
@@ -729,7 +737,7 @@ TEST_F(SocketCanBench, IdleReceiveSleeps) {
   const auto waited = SteadyClock::now() - started;
   const auto cpu = thread_cpu() - cpu_before;
   EXPECT_GE(waited, 2s);
-  EXPECT_LT(cpu, 50ms);  // getrusage in UML counts whole 10 ms ticks
+  EXPECT_LT(cpu, spinning_above(2s)) << "spinning while idle";
   std::cout << "[ measure  ] idle receive(2 s): " << ms(waited) << " ms, " << cpu.count()
             << " us CPU\n";
 }
