@@ -26,13 +26,13 @@
 #include <thread>
 #include <vector>
 
-#include "teejet/gateway/gateway.hpp"
 #include "teejet/can/open_bus.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/can_id.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
+#include "teejet/gateway/gateway.hpp"
 #include "teejet/valvePubSubTypes.h"
 
 namespace {

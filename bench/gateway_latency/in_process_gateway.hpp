@@ -9,9 +9,9 @@
 #include <memory>
 #include <string>
 
-#include "teejet/gateway/gateway.hpp"
 #include "options.hpp"
 #include "teejet/can/bus.hpp"
+#include "teejet/gateway/gateway.hpp"
 
 namespace teejet::bench {
 

@@ -102,11 +102,12 @@ std::string to_valve_table() {
   for (const MessageInfo& message : message_table(Flow::kToValve)) {
     const std::string answer =
         message.reply ? cat({"`", name_of(Flow::kFromValve, *message.reply), "`"}) : "";
-    const std::string kind = message.run_command         ? "run command"
-                             : message.telemetry_request ? cat({"telemetry `", message.subject, "`"})
-                                                         : "setting";
-    text += cat({"| `", hex(message.id), "` | `", message.name, "` | ", fields_text(message),
-                 " | ", answer, " | ", kind, " |\n"});
+    const std::string kind = message.run_command ? "run command"
+                             : message.telemetry_request
+                                 ? cat({"telemetry `", message.subject, "`"})
+                                 : "setting";
+    text += cat({"| `", hex(message.id), "` | `", message.name, "` | ", fields_text(message), " | ",
+                 answer, " | ", kind, " |\n"});
   }
   return text;
 }
@@ -118,8 +119,8 @@ std::string from_valve_table() {
                              : !message.error_kind.empty()
                                  ? cat({"error `", message.error_kind, "`"})
                                  : "announcement";
-    text += cat({"| `", hex(message.id), "` | `", message.name, "` | ", fields_text(message),
-                 " | ", kind, " |\n"});
+    text += cat({"| `", hex(message.id), "` | `", message.name, "` | ", fields_text(message), " | ",
+                 kind, " |\n"});
   }
   return text;
 }

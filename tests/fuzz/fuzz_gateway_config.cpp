@@ -12,10 +12,10 @@
 #include <string>
 #include <variant>
 
-#include "teejet/gateway/config.hpp"
 #include "fuzz_input.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/gateway/config.hpp"
 
 namespace {
 

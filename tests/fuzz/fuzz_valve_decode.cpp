@@ -15,10 +15,10 @@
 #include <string>
 #include <string_view>
 
-#include "teejet/frame_json/frame_json.hpp"
 #include "fuzz_input.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 
 namespace {
 

@@ -11,12 +11,12 @@
 #include <memory>
 #include <string>
 
-#include "teejet/gateway/bus_backend.hpp"
-#include "teejet/gateway/gateway.hpp"
 #include "support/eventually.hpp"
 #include "support/test_domain.hpp"
 #include "support/valve_commands.hpp"
 #include "teejet/can/virtual_bus.hpp"
+#include "teejet/gateway/bus_backend.hpp"
+#include "teejet/gateway/gateway.hpp"
 
 namespace teejet::gateway::fixture {
 

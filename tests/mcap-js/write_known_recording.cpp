@@ -572,7 +572,8 @@ int main(int argc, char** argv) {
   }
   write_text(dir + "/known.json", expected.dump(1) + "\n");
   // Every topic of the contract, for the check that the known recording covers them all.
-  write_text(dir + "/contract-topics.json", contract_topics(topics::EverySampleType{}).dump() + "\n");
+  write_text(dir + "/contract-topics.json",
+             contract_topics(topics::EverySampleType{}).dump() + "\n");
 
   // A schema name that valve.idl does not define: the channel cannot be decoded.
   std::vector<ChannelSpec> unknown = {{topics::topic_name<teejet::ValvePosition>(),

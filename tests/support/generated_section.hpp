@@ -33,7 +33,8 @@ inline void expect_generated_section(const std::filesystem::path& file, std::str
   ASSERT_LT(from, to) << file << ": the END line of " << name << " comes before its BEGIN line";
   const std::string current = text.substr(from + begin.size(), to - from - begin.size());
   if (current == expected) return;
-  if (const char* update = std::getenv("TEEJET_UPDATE_DOCS"); update && std::string(update) == "1") {
+  if (const char* update = std::getenv("TEEJET_UPDATE_DOCS");
+      update && std::string(update) == "1") {
     const auto temporary = std::filesystem::path(file.string() + ".new");
     {
       std::ofstream out(temporary, std::ios::trunc);

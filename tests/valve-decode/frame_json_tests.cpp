@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "teejet/frame_json/frame_json.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 
 namespace teejet::frame_json {
 namespace {

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "teejet/gateway/gateway.hpp"
 #include "support/dds_peer.hpp"
 #include "teejet/can/virtual_bus.hpp"
+#include "teejet/gateway/gateway.hpp"
 
 namespace teejet::testing {
 

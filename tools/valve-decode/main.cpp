@@ -12,11 +12,11 @@
 #include <string_view>
 #include <vector>
 
-#include "teejet/frame_json/frame_json.hpp"
 #include "mcap_input.hpp"
 #include "teejet/candump/log_line.hpp"
 #include "teejet/codec/codec.hpp"
 #include "teejet/command_line.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 
 namespace {
 

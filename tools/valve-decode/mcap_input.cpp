@@ -3,8 +3,8 @@
 #include <optional>
 #include <set>
 
-#include "teejet/frame_json/frame_json.hpp"
 #include "teejet/bus_frame/bus_frame.hpp"
+#include "teejet/frame_json/frame_json.hpp"
 #include "teejet/mcap/reader.hpp"
 
 namespace teejet::valve_decode {

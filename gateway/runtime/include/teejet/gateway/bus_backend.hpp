@@ -8,9 +8,9 @@
 #include <optional>
 #include <string>
 
-#include "teejet/gateway/config.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/core/result.hpp"
+#include "teejet/gateway/config.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace teejet::gateway {

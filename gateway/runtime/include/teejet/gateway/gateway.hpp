@@ -8,13 +8,13 @@
 #include <memory>
 #include <thread>
 
-#include "teejet/gateway/bus_backend.hpp"
-#include "teejet/gateway/config.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/dds/command_subscription.hpp"
 #include "teejet/dds/frame_publisher.hpp"
 #include "teejet/dds/gateway_publisher.hpp"
+#include "teejet/gateway/bus_backend.hpp"
+#include "teejet/gateway/config.hpp"
 #include "teejet/sim/simulator.hpp"
 
 namespace teejet::gateway {

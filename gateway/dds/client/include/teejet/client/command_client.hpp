@@ -17,8 +17,8 @@
 #include <string>
 #include <string_view>
 
-#include "teejet/dds/participant.hpp"
 #include "teejet/client/valve_view.hpp"
+#include "teejet/dds/participant.hpp"
 
 namespace teejet::client {
 
