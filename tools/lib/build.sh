@@ -46,10 +46,11 @@ tj_now_us() {
 # CPU time (user + system, milliseconds) of every child process this shell has waited for, and of
 # their children that they waited for: the difference across a step is what the step cost the
 # machine, whatever else shared it. (/proc/PID/stat after the command name: the children's user
-# and system clock ticks are the 14th and 15th fields.)
+# and system clock ticks are the 14th and 15th fields.) tj_cpu_ms [PID]: of that shell instead;
+# a subshell passes its own, $BASHPID ($$ stays the parent's there).
 tj_cpu_ms() {
   local stat
-  stat=$(<"/proc/$$/stat")
+  stat=$(<"/proc/${1:-$$}/stat")
   stat=${stat##*) }
   awk -v fields="$stat" -v hz="$(getconf CLK_TCK)" \
     'BEGIN { split(fields, f, " "); printf "%d\n", (f[14] + f[15]) * 1000 / hz }'
