@@ -356,18 +356,31 @@ ValveCommand to_command(const codec::ToValveMessage& message) {
   return command;
 }
 
-std::optional<codec::ToValveMessage> request_of(Telemetry telemetry) {
-  for (const auto& [value, request] : kTelemetryRequests) {
-    if (value == telemetry) return request;
+// The rows pair an IDL value with the codec message it stands for; both lookups walk them.
+template <class Rows, class Value>
+auto message_for(const Rows& rows, Value value)
+    -> std::optional<typename Rows::value_type::second_type> {
+  for (const auto& [row_value, message] : rows) {
+    if (row_value == value) return message;
   }
   return std::nullopt;
 }
 
-std::optional<Telemetry> telemetry_of(const codec::ToValveMessage& request) {
-  for (const auto& [value, row] : kTelemetryRequests) {
-    if (codec::message_id(row) == codec::message_id(request)) return value;
+template <class Rows, class Message>
+auto value_for(const Rows& rows, const Message& message)
+    -> std::optional<typename Rows::value_type::first_type> {
+  for (const auto& [row_value, row_message] : rows) {
+    if (codec::message_id(row_message) == codec::message_id(message)) return row_value;
   }
   return std::nullopt;
+}
+
+std::optional<codec::ToValveMessage> request_of(Telemetry telemetry) {
+  return message_for(kTelemetryRequests, telemetry);
+}
+
+std::optional<Telemetry> telemetry_of(const codec::ToValveMessage& request) {
+  return value_for(kTelemetryRequests, request);
 }
 
 std::optional<Telemetry> telemetry_of(std::string_view word) {
@@ -376,17 +389,11 @@ std::optional<Telemetry> telemetry_of(std::string_view word) {
 }
 
 std::optional<codec::FromValveMessage> error_message_of(ErrorKind kind) {
-  for (const auto& [value, message] : kErrorMessages) {
-    if (value == kind) return message;
-  }
-  return std::nullopt;
+  return message_for(kErrorMessages, kind);
 }
 
 std::optional<ErrorKind> error_kind_of(const codec::FromValveMessage& message) {
-  for (const auto& [value, row] : kErrorMessages) {
-    if (codec::message_id(row) == codec::message_id(message)) return value;
-  }
-  return std::nullopt;
+  return value_for(kErrorMessages, message);
 }
 
 // The IDL's Direction values are the wire's, Target Degrees's direction byte included.
