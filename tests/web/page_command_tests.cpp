@@ -207,6 +207,45 @@ TEST(WebCommands, WithATokenOnlyCommandsCarryingItAreSent) {
   EXPECT_EQ(refusal("[]", policy), "a command must be a JSON object");
 }
 
+// {"id":[[[...]]]}: 500 levels in 1 KB once took down a CivetWeb worker (its 100 KiB stack) in
+// the dump() of the answer that echoed the id.
+TEST(WebCommands, DeeplyNestedJsonIsRefusedUnparsedAndNotEchoed) {
+  const std::string bomb = R"({"id":)" + std::string(500, '[') + std::string(500, ']') + "}";
+  RecordingSender sender;
+  EXPECT_EQ(
+      handle_page_message(bomb, testing::three_valves(), kAllow, sender),
+      (json{{"type", "refused"}, {"id", nullptr}, {"reason", "JSON nested deeper than 4 levels"}}));
+  EXPECT_EQ(handle_page_message(bomb, testing::three_valves(), CommandPolicy{false, ""}, sender),
+            (json{{"type", "refused"},
+                  {"id", nullptr},
+                  {"reason",
+                   "commands are disabled: teejet-web runs read-only (start it with "
+                   "--allow-commands)"}}));
+  EXPECT_TRUE(sender.sent.empty());
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","x":[[[[1]]]]})"),
+            "JSON nested deeper than 4 levels");
+  // Brackets inside strings are text, not nesting.
+  EXPECT_EQ(refusal(R"({"id":"[[[[[\"[[","command":"stop","serial":"TJV000001"})"), "");
+  EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","x":[[[1]]]})"),
+            "stop: unknown field \"x\"");
+}
+
+TEST(WebCommands, OnlyANumberOrAShortStringIdIsEchoed) {
+  const auto id_of = [](const std::string& id) {
+    RecordingSender sender;
+    return handle_page_message(R"({"command":"stop","serial":"TJV000001","id":)" + id + "}",
+                               testing::three_valves(), kAllow, sender)["id"];
+  };
+  EXPECT_EQ(id_of("7"), 7);
+  EXPECT_EQ(id_of("-2.5"), -2.5);
+  EXPECT_EQ(id_of('"' + std::string(kMaxIdBytes, 'a') + '"'), std::string(kMaxIdBytes, 'a'));
+  EXPECT_EQ(id_of('"' + std::string(kMaxIdBytes + 1, 'a') + '"'), nullptr);
+  EXPECT_EQ(id_of(R"({"a":1})"), nullptr);
+  EXPECT_EQ(id_of("[1]"), nullptr);
+  EXPECT_EQ(id_of("true"), nullptr);
+  EXPECT_EQ(id_of("null"), nullptr);
+}
+
 TEST(WebCommands, ThePolicyTellsThePageWhetherCommandsAndATokenAreNeededButNotTheToken) {
   EXPECT_EQ(command_policy_json({}), (json{{"allowed", false}, {"token_required", false}}));
   EXPECT_EQ(command_policy_json({true, ""}), (json{{"allowed", true}, {"token_required", false}}));

@@ -6,7 +6,8 @@ client (web_client.py, standard library only) stands in for the page.
 
   readonly  GET /api/valves lists the 4 valves; POST is refused (405); the WebSocket's first
             message is the snapshot; a command is refused with the read-only reason; a WebSocket
-            from another Origin is refused.
+            from another Origin is refused; 500 levels of nesting in an "id" are refused with a
+            null id and /api/valves still answers.
   commands  bad input (malformed, 360 degrees, unknown serial, over 4 KiB) is refused with its
             reason; a move to 90 degrees reaches completed, the position follows to 90.0, the
             target shows while it runs and is gone after; updates come at most once per 40 ms
@@ -81,6 +82,15 @@ def readonly():
     foreign = WebSocket(origin="http://example.com")
     check(foreign.status != "HTTP/1.1 101 Switching Protocols",
           "a WebSocket from another Origin was accepted")
+    # 1 KB of nesting once took down a CivetWeb worker, and with it teejet-web.
+    bomb = '{"id":' + "[" * 500 + "]" * 500 + "}"
+    answer = page.answer(bomb)
+    check(answer == {"type": "refused", "id": None,
+                     "reason": "commands are disabled: teejet-web runs read-only (start it with "
+                               "--allow-commands)"}, f"answer to 500 levels of nesting: {answer}")
+    status, body = get("/api/valves")
+    check(status == 200 and len(json.loads(body)) == 4,
+          f"/api/valves after 500 levels of nesting: {status} {body[:80]}")
 
 
 def commands():

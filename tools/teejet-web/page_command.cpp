@@ -107,14 +107,58 @@ Result<ValveCommand> build(const Shape& shape, const json& page) {
   return command;
 }
 
-}  // namespace
+// Whether no array or object of `text` lies deeper than `max_depth`, counted without parsing.
+bool nested_within(std::string_view text, int max_depth) {
+  int depth = 0;
+  bool in_string = false;
+  bool escaped = false;
+  for (const char c : text) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) return false;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return true;
+}
 
-Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table) {
+// The message parsed (discarded when it is not JSON), or why it is not even read.
+Result<json> read_message(std::string_view text) {
   if (text.size() > kMaxCommandBytes) {
     return refused("message of " + std::to_string(text.size()) + " bytes is over the limit of " +
                    std::to_string(kMaxCommandBytes));
   }
-  return check_page_command(json::parse(text, nullptr, /*allow_exceptions=*/false), table);
+  if (!nested_within(text, kMaxJsonDepth)) {
+    return refused("JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+  }
+  return json::parse(text, nullptr, /*allow_exceptions=*/false);
+}
+
+// The page's "id" when it is safe to send back, null otherwise.
+json echoed_id(const Result<json>& message) {
+  if (!message || !message->is_object() || !message->contains("id")) return nullptr;
+  const json& id = message->at("id");
+  if (id.is_number()) return id;
+  if (id.is_string() && id.get_ref<const std::string&>().size() <= kMaxIdBytes) return id;
+  return nullptr;
+}
+
+}  // namespace
+
+Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table) {
+  const auto message = read_message(text);
+  if (!message) return message.error();
+  return check_page_command(*message, table);
 }
 
 Result<PageCommand> check_page_command(const json& message, const client::ValveTable& table) {
@@ -218,25 +262,21 @@ json command_policy_json(const CommandPolicy& policy) {
 
 json handle_page_message(std::string_view text, const client::ValveTable& table,
                          const CommandPolicy& policy, CommandSender& sender) {
-  json id = nullptr;
+  // Parsed once; the id is echoed even when the command is refused.
+  const auto message = read_message(text);
+  const json id = echoed_id(message);
   const auto refuse = [&](const std::string& reason) {
     return json{{"type", "refused"}, {"id", id}, {"reason", reason}};
   };
-  // Parsed once, unless it is too long to read at all; the id is echoed even when the command
-  // is refused, as long as the message could be read.
-  const bool readable = text.size() <= kMaxCommandBytes;
-  const json message = readable ? json::parse(text, nullptr, /*allow_exceptions=*/false)
-                                : json(json::value_t::discarded);
-  if (message.is_object() && message.contains("id")) id = message.at("id");
   if (!policy.allow_commands) return refuse(kReadOnly);
+  if (!message) return refuse(message.error().reason);
   // What is not even an object is refused below for what it is; it can carry no command.
-  if (!policy.token.empty() && message.is_object()) {
-    const bool match = message.contains("token") && message.at("token").is_string() &&
-                       message.at("token").get<std::string>() == policy.token;
+  if (!policy.token.empty() && message->is_object()) {
+    const bool match = message->contains("token") && message->at("token").is_string() &&
+                       message->at("token").get<std::string>() == policy.token;
     if (!match) return refuse("missing or wrong \"token\"");
   }
-  const auto checked =
-      readable ? check_page_command(message, table) : parse_page_command(text, table);
+  const auto checked = check_page_command(*message, table);
   if (!checked) return refuse(checked.error().reason);
   json commands = json::array();
   for (const std::uint32_t serial : checked->serials) {

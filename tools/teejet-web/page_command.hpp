@@ -22,6 +22,11 @@ namespace teejet::web {
 
 // Larger messages are refused unread: no command needs more than a few hundred bytes.
 inline constexpr std::size_t kMaxCommandBytes = 4096;
+// Deeper JSON is refused unparsed: a command is one object of plain values. nlohmann's dump()
+// recurses once per level, and a CivetWeb worker's stack is 100 KiB.
+inline constexpr int kMaxJsonDepth = 4;
+// An "id" the answer echoes: a number, or a string of at most this many bytes (null otherwise).
+inline constexpr std::size_t kMaxIdBytes = 64;
 
 // A checked command: what to write, to which valves (several for stop_all).
 struct PageCommand {
@@ -64,7 +69,8 @@ nlohmann::json command_policy_json(const CommandPolicy& policy);
 // The answer to one message from the page:
 // {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did
 // not take has "error":"why" instead of "command_id") or
-// {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" (null without).
+// {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" when it is a number
+// or a string of at most kMaxIdBytes, null otherwise.
 nlohmann::json handle_page_message(std::string_view text, const client::ValveTable& table,
                                    const CommandPolicy& policy, CommandSender& sender);
 
