@@ -14,18 +14,27 @@ read-only, and headless Chromium driven by Selenium through chromedriver:
   (e) when the read-only teejet-web stops, its page says it is reconnecting, and it is back with
       its 4 cards by itself once teejet-web runs again;
   (f) with --token, the page asks for it: a Stop without it is refused with the reason shown in
-      the card; with it the command is sent and reaches its final status.
+      the card; with it the command is sent and reaches its final status;
+  (g) DNS rebinding: the browser resolves attacker.test to 127.0.0.1 (--host-resolver-rules); a
+      page loaded as http://attacker.test:PORT/ gets 403, and the WebSocket its script opens
+      to the commanding teejet-web to move TJV000004 is refused: the valve stays where it was;
+  (h) clickjacking: a page of another local port that frames the dashboard gets no dashboard in
+      its frame (the frame's document has no #cards).
 
 Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Every wait is a
 condition with a deadline; every failure says what differed.
 """
 
 import argparse
+import functools
+import http.server
+import json
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 import urllib.request
 
@@ -36,6 +45,8 @@ COMMANDS_PORT = 18180
 READONLY_PORT = 18181
 TOKEN_PORT = 18182
 TOKEN = "s3cret"
+FRAMING_PORT = 18183
+REBOUND_NAME = "attacker.test"
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
 READ_ONLY_REASON = ("commands are disabled: teejet-web runs read-only (start it with "
                     "--allow-commands)")
@@ -227,6 +238,68 @@ def token_page(driver):
     print(f"(f) token: refused without it, {sent['status']!r} with it")
 
 
+def valve_position(port, serial):
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/valves", timeout=5) as response:
+        return next(v["position"] for v in json.load(response) if v["serial"] == serial)
+
+
+def rebinding(driver):
+    """A page of attacker.test, its name rebound to 127.0.0.1, tries to move a valve."""
+    before = valve_position(COMMANDS_PORT, "TJV000004")
+    check(before is not None and abs(before - 200) > 5,
+          f"TJV000004 is at {before}: a move to 200 would prove nothing")
+    driver.get(f"http://{REBOUND_NAME}:{COMMANDS_PORT}/")
+    body = driver.find_element(By.TAG_NAME, "body").text
+    check("does not serve this Host name" in body, f"the page of {REBOUND_NAME}: {body[:200]!r}")
+    outcome = driver.execute_async_script("""
+      const done = arguments[arguments.length - 1];
+      const seen = [];
+      const ws = new WebSocket(`ws://${location.host}/ws`);
+      ws.onopen = () => {
+        seen.push('open');
+        ws.send(JSON.stringify({id: 1, command: 'move', serial: 'TJV000004', degrees: 200,
+                                speed_percent: 100, direction: 'shortest'}));
+      };
+      ws.onmessage = (event) => seen.push(JSON.parse(event.data).type);
+      ws.onclose = () => { seen.push('closed'); done(seen); };""")
+    check(outcome == ["closed"], f"the rebound page's WebSocket: {outcome}, not closed unopened")
+    # The valve would start turning within a poll; it was never sent a command, so it stays.
+    after = valve_position(COMMANDS_PORT, "TJV000004")
+    check(after == before, f"TJV000004 moved from {before} to {after} for a rebound page")
+    print(f"(g) rebinding: {REBOUND_NAME} got 403, its WebSocket {outcome}, TJV000004 stays at "
+          f"{after}")
+
+
+def framing(driver, work):
+    """Another local site frames the dashboard to trick a click: the frame stays empty."""
+    with open(os.path.join(work, "frame.html"), "w") as page:
+        page.write(f'<!doctype html><iframe id="victim" width="800" height="600" '
+                   f'src="http://127.0.0.1:{COMMANDS_PORT}/"></iframe>')
+    handler = functools.partial(http.server.SimpleHTTPRequestHandler, directory=work)
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", FRAMING_PORT), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        driver.get(f"http://127.0.0.1:{FRAMING_PORT}/frame.html")
+
+        def frame_content():
+            driver.switch_to.default_content()
+            driver.switch_to.frame(driver.find_element(By.ID, "victim"))
+            return driver.execute_script(
+                "return {url: document.URL, ready: document.readyState, "
+                "cards: document.getElementById('cards') !== null}")
+
+        # Blocked, the frame holds Chromium's error document once it is done loading.
+        seen = eventually(frame_content, 10, "the framed dashboard loaded or blocked",
+                          ok=lambda seen: seen["ready"] == "complete" and
+                          seen["url"] != "about:blank")
+        check(not seen["cards"], f"the dashboard showed in another site's frame: {seen}")
+        print(f"(h) framing: the frame holds {seen['url']!r}, no dashboard")
+    finally:
+        driver.switch_to.default_content()
+        server.shutdown()
+        server.server_close()
+
+
 def reconnects(driver, restart):
     """The page shows that its server went away, and comes back by itself when it returns."""
     stopped = restart.stop()
@@ -283,7 +356,8 @@ def start_browser(work):
     options.binary_location = shutil.which("chromium")
     for argument in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
                      "--window-size=1400,1000", "--disable-gpu", "--no-first-run",
-                     "--hide-scrollbars", f"--user-data-dir={os.path.join(work, 'chromium')}"):
+                     "--hide-scrollbars", f"--user-data-dir={os.path.join(work, 'chromium')}",
+                     f"--host-resolver-rules=MAP {REBOUND_NAME} 127.0.0.1"):
         options.add_argument(argument)
     service = Service(shutil.which("chromedriver"), log_path=os.path.join(work, "chromedriver.log"))
     return webdriver.Chrome(service=service, options=options)
@@ -321,6 +395,8 @@ def main():
         wait_for_server(READONLY_PORT, read_only, 15)
         driver = start_browser(work)
         commanding_page(driver, args.artifacts, args.screenshot)
+        rebinding(driver)
+        framing(driver, work)
         read_only_page(driver)
         reconnects(driver, read_only)
         wait_for_server(TOKEN_PORT, with_token, 15)

@@ -12,6 +12,9 @@ client (web_client.py, standard library only) stands in for the page.
             reason; a move to 90 degrees reaches completed, the position follows to 90.0, the
             target shows while it runs and is gone after; updates come at most once per 40 ms
             tick with each valve at most once per update.
+  guards    a foreign Host (DNS rebinding) gets 403 on /, /api/valves and /ws, also with its own
+            matching Origin; a name given with --allowed-host is served; X-Frame-Options: DENY and
+            the Content-Security-Policy come with /, a file, /api/valves, a 404 and the 403.
   pages     48 pages at once get their snapshot and /api/valves still answers; the 49th is
             refused; when one closes, a new page gets in.
   slowpage  a page floods teejet-web with refused commands and never reads: it is dropped, and
@@ -154,6 +157,39 @@ def commands():
     print(f"move completed in {elapsed:.2f} s with {updates} updates")
 
 
+UPGRADE = ("Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+           "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n")
+CSP = ("default-src 'self'; connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; "
+       "form-action 'none'; object-src 'none'")
+
+
+def guards():
+    wait_for_valves(WEB, 4, 15)
+    own, foreign = f"127.0.0.1:{PORT}", f"attacker.example:{PORT}"
+    for path, extra in (("/", ""), ("/api/valves", ""), ("/ws", UPGRADE),
+                        ("/ws", UPGRADE + f"Origin: http://{foreign}\r\n")):
+        status, headers, body = web_client.raw_http(PORT, path, foreign, extra)
+        check(status == "HTTP/1.1 403 Forbidden", f"{path} with Host {foreign}: {status!r}")
+        check("--allowed-host NAME" in body, f"403 of {path}: {body!r}")
+        check(headers.get("X-Frame-Options") == "DENY", f"403 of {path}: headers {headers}")
+    status, _, _ = web_client.raw_http(PORT, "/ws", own, UPGRADE + f"Origin: http://{own}\r\n")
+    check(status == SWITCHING, f"/ws with Host and Origin {own}: {status!r}")
+    status, _, _ = web_client.raw_http(PORT, "/ws", own, UPGRADE + f"Origin: http://{foreign}\r\n")
+    check(status != SWITCHING, f"/ws with Host {own} and Origin {foreign} was accepted")
+    status, _, _ = web_client.raw_http(PORT, "/api/valves", f"bench-pc:{PORT}")
+    check(status == "HTTP/1.1 200 OK", f"/api/valves with Host bench-pc (--allowed-host): {status}")
+    status, _, _ = web_client.raw_http(PORT, "/api/valves", f"localhost:{PORT}")
+    check(status == "HTTP/1.1 200 OK", f"/api/valves with Host localhost: {status}")
+    for path, expected in (("/", "200 OK"), ("/dashboard.js", "200 OK"), ("/api/valves", "200 OK"),
+                           ("/nothing-here", "404 Not Found")):
+        status, headers, _ = web_client.raw_http(PORT, path, own)
+        check(status == f"HTTP/1.1 {expected}", f"{path}: {status!r}, not {expected}")
+        check(headers.get("X-Frame-Options") == "DENY" and
+              headers.get("Content-Security-Policy") == CSP,
+              f"{path} ({status}): headers {headers}")
+    print("foreign Host refused on every route, security headers on every answer")
+
+
 def pages():
     wait_for_valves(WEB, 4, 15)
     open_pages = []
@@ -227,7 +263,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--gateway", required=True)
     parser.add_argument("--web", required=True)
-    parser.add_argument("case", choices=["readonly", "commands", "pages", "slowpage"])
+    parser.add_argument("case", choices=["readonly", "commands", "guards", "pages", "slowpage"])
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="teejet-web-e2e-")
     gateway_log = open(os.path.join(work, "gateway.log"), "w")
@@ -235,11 +271,13 @@ def main():
     web_args = [args.web, "--listen", f"127.0.0.1:{PORT}"]
     if args.case in ("commands", "slowpage"):
         web_args.append("--allow-commands")
+    if args.case == "guards":
+        web_args += ["--allowed-host", "Bench-PC"]
     gateway = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
                                stderr=subprocess.STDOUT)
     WEB = subprocess.Popen(web_args, stdout=open(web_log_path, "w"), stderr=subprocess.STDOUT)
     try:
-        {"readonly": readonly, "commands": commands, "pages": pages,
+        {"readonly": readonly, "commands": commands, "guards": guards, "pages": pages,
          "slowpage": slowpage}[args.case]()
     except (Failure, Timeout) as failure:
         print(f"FAIL: {failure}")

@@ -87,6 +87,27 @@ class WebSocket:
                           ok=lambda message: message["type"] in ("sent", "refused"), interval=0)
 
 
+def raw_http(port, path, host, extra=""):
+    """One request as written, read to its end: (status line, {header: value}, body). For the
+    headers urllib would not send (a foreign Host) and the handshakes it cannot make."""
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        close = "" if "Connection:" in extra else "Connection: close\r\n"
+        sock.sendall(f"GET {path} HTTP/1.1\r\nHost: {host}\r\n{close}{extra}\r\n".encode())
+        data = b""
+        while b"\r\n\r\n" not in data or not data.startswith(b"HTTP/1.1 101"):
+            try:
+                chunk = sock.recv(65536)
+            except socket.timeout:
+                break
+            if not chunk:
+                break
+            data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    lines = head.decode(errors="replace").split("\r\n")
+    headers = dict(line.split(": ", 1) for line in lines[1:] if ": " in line)
+    return lines[0], headers, body.decode(errors="replace")
+
+
 def http_get(port, path, method="GET"):
     request = urllib.request.Request(f"http://127.0.0.1:{port}{path}", method=method)
     try:

@@ -15,8 +15,10 @@
 #include <system_error>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "listen_address.hpp"
+#include "request_guard.hpp"
 #include "sender.hpp"
 #include "server.hpp"
 #include "teejet/client/valve_view.hpp"
@@ -41,6 +43,7 @@ struct Options {
   bool allow_commands = false;
   std::string token;
   std::string www;
+  std::vector<std::string> allowed_hosts;  // after parse(): lower case, checked
 };
 
 // Nothing when teejet-web goes on; otherwise the status to exit with, the reason printed.
@@ -58,6 +61,9 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
       ->check(CLI::Range(0, teejet::dds::kMaxDomain));
   app.add_option("--profile", options.profile_file, "Fast DDS XML profiles file, as the gateway's")
       ->check(CLI::ExistingFile);
+  app.add_option("--allowed-host", options.allowed_hosts,
+                 "a host NAME people type to reach this server (repeatable); its addresses and, "
+                 "on loopback, localhost are allowed already");
   app.add_flag("--allow-commands", options.allow_commands,
                "accept commands from the page (read-only otherwise)");
   app.add_option("--token", options.token, "with --allow-commands: every command must carry it");
@@ -74,6 +80,14 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
     return kExitUsage;
   }
   options.listen = *listen;
+  for (std::string& name : options.allowed_hosts) {
+    const auto allowed = web::parse_allowed_host(name);
+    if (!allowed) {
+      std::cerr << "teejet-web: " << allowed.error().reason << '\n';
+      return kExitUsage;
+    }
+    name = *allowed;
+  }
   if (!options.token.empty() && !options.allow_commands) {
     std::cerr << "teejet-web: --token needs --allow-commands\n";
     return kExitUsage;
@@ -142,7 +156,10 @@ int main(int argc, char** argv) {
   if (!dds) return fail(dds.error());
   web::DdsSender sender(*dds->participant, *dds->view);
   const auto server = web::Server::start(
-      {.listen = options.listen, .www = *www, .policy = {options.allow_commands, options.token}},
+      {.listen = options.listen,
+       .www = *www,
+       .policy = {options.allow_commands, options.token},
+       .hosts = web::allowed_hosts(options.listen, web::local_addresses(), options.allowed_hosts)},
       *dds->view, sender);
   if (!server) return fail(server.error());
   announce(options, *www);

@@ -41,7 +41,7 @@ struct Server::Page {
 
 Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, client::ValveView& view,
                                               DdsSender& sender) {
-  std::unique_ptr<Server> server(new Server(options.policy, view, sender));
+  std::unique_ptr<Server> server(new Server(options, view, sender));
   mg_init_library(0);
   const std::string document_root = options.www.string();
   const std::string threads = std::to_string(kMaxPages + kHttpThreads);
@@ -53,9 +53,12 @@ Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, clie
                                   document_root.c_str(),
                                   "enable_directory_listing",
                                   "no",
+                                  "additional_header",
+                                  kSecurityHeaders,
                                   nullptr};
   mg_callbacks callbacks{};
-  server->context_ = mg_start(&callbacks, nullptr, server_options);
+  callbacks.begin_request = admit;
+  server->context_ = mg_start(&callbacks, server.get(), server_options);
   if (server->context_ == nullptr) {
     return Error{ErrorCode::kUnavailable, "cannot listen on " + options.listen};
   }
@@ -64,8 +67,8 @@ Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, clie
   return server;
 }
 
-Server::Server(const CommandPolicy& policy, client::ValveView& view, DdsSender& sender)
-    : policy_(policy), view_(view), sender_(sender) {}
+Server::Server(const ServerOptions& options, client::ValveView& view, DdsSender& sender)
+    : policy_(options.policy), hosts_(options.hosts), view_(view), sender_(sender) {}
 
 Server::~Server() {
   if (context_ != nullptr) mg_stop(context_);
@@ -84,6 +87,16 @@ void Server::tick(std::uint64_t stamp_ms) {
     for (const CommandStatus& status : statuses) page->batcher.add_status(status);
     if (const auto update = page->batcher.tick(frame, stamp_ms)) post(*page, *update);
   }
+}
+
+// Before any route: a name teejet-web does not serve under is a rebound one (see request_guard).
+int Server::admit(mg_connection* connection) {
+  const auto& server = *static_cast<const Server*>(mg_get_user_data(mg_get_context(connection)));
+  const char* host = mg_get_header(connection, "Host");
+  if (host != nullptr && host_allowed(host, server.hosts_)) return 0;
+  const std::string answer = forbidden_host_answer();
+  mg_write(connection, answer.data(), answer.size());
+  return 403;
 }
 
 int Server::valves(mg_connection* connection, void* data) {
@@ -108,9 +121,8 @@ int Server::connect(const mg_connection* connection, void* data) {
     if (server.pages_.size() >= kMaxPages) return 1;
   }
   const char* origin = mg_get_header(connection, "Origin");
-  const char* host = mg_get_header(connection, "Host");
   if (origin == nullptr) return 0;  // not a browser
-  return host != nullptr && std::string(origin) == std::string("http://") + host ? 0 : 1;
+  return origin_allowed(origin, server.hosts_) ? 0 : 1;
 }
 
 void Server::ready(mg_connection* connection, void* data) {

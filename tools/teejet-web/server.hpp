@@ -14,6 +14,7 @@
 #include <string>
 
 #include "page_command.hpp"
+#include "request_guard.hpp"
 #include "sender.hpp"
 #include "teejet/client/valve_view.hpp"
 #include "teejet/core/result.hpp"
@@ -27,6 +28,7 @@ struct ServerOptions {
   std::string listen;         // CivetWeb's listening_ports, as parse_listen() made it
   std::filesystem::path www;  // the page's files, as find_www() found them
   CommandPolicy policy;
+  AllowedHosts hosts;  // the Host names every request must give
 };
 
 class Server {
@@ -46,8 +48,9 @@ class Server {
  private:
   struct Page;
 
-  Server(const CommandPolicy& policy, client::ValveView& view, DdsSender& sender);
+  Server(const ServerOptions& options, client::ValveView& view, DdsSender& sender);
 
+  static int admit(mg_connection* connection);
   static int valves(mg_connection* connection, void* data);
   static int connect(const mg_connection* connection, void* data);
   static void ready(mg_connection* connection, void* data);
@@ -57,6 +60,7 @@ class Server {
   static void post(Page& page, const nlohmann::json& message);
 
   const CommandPolicy policy_;
+  const AllowedHosts hosts_;
   client::ValveView& view_;
   DdsSender& sender_;
   std::mutex mutex_;
