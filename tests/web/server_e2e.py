@@ -15,6 +15,11 @@ client (web_client.py, standard library only) stands in for the page.
   guards    a foreign Host (DNS rebinding) gets 403 on /, /api/valves and /ws, also with its own
             matching Origin; a name given with --allowed-host is served; X-Frame-Options: DENY and
             the Content-Security-Policy come with /, a file, /api/valves, a 404 and the 403.
+  token     teejet-web with --token-file (and a second one with TEEJET_WEB_TOKEN): neither
+            token is in /proc/PID/cmdline; of 200 wrong tokens on one socket the first 5 are
+            checked, and at most 12 in all (the lockouts double from 1 s: a 13th would take over
+            2 minutes), the others refused unchecked; the log names the socket's address and
+            port; the right token from another connection is then accepted.
   pages     48 pages at once get their snapshot and /api/valves still answers; the 49th is
             refused; when one closes, a new page gets in.
   slowpage  a page floods teejet-web with refused commands and never reads: it is dropped, and
@@ -190,6 +195,44 @@ def guards():
     print("foreign Host refused on every route, security headers on every answer")
 
 
+TOKEN = "bench-s3cret"
+WRONG = "missing or wrong \"token\""
+LOCKED = "too many wrong tokens on this connection: not checked for "
+
+
+def token():
+    wait_for_valves(WEB, 4, 15)
+    stop = {"command": "stop", "serial": "TJV000001"}
+    for process in (WEB, WEB_BY_VARIABLE):
+        cmdline = open(f"/proc/{process.pid}/cmdline", "rb").read()
+        check(TOKEN.encode() not in cmdline, f"the token is in /proc/PID/cmdline: {cmdline}")
+    guesser = WebSocket()
+    guesser.receive()
+    reasons = [guesser.answer(json.dumps(dict(stop, token=f"guess{n}")))["reason"]
+               for n in range(200)]
+    checked = reasons.count(WRONG)
+    locked = sum(reason.startswith(LOCKED) for reason in reasons)
+    check(reasons[:5] == [WRONG] * 5 and 5 <= checked <= 12 and checked + locked == 200,
+          f"of 200 wrong tokens {checked} were checked, {locked} refused unchecked; first "
+          f"{reasons[:6]}")
+    port = guesser.sock.getsockname()[1]
+    log = open(WEB_LOG).read()
+    check(f"5 wrong tokens on one connection: its tokens are not checked for 1 s (from 127.0.0.1 "
+          f"port {port})" in log, f"no lockout of port {port} in the log:\n{log}")
+    operator = WebSocket()
+    operator.receive()
+    answer = operator.answer(json.dumps(dict(stop, id=3, token=TOKEN)))
+    check(answer["type"] == "sent", f"the right token from another connection: {answer}")
+    eventually(lambda: web_client.valves(PORT + 1), 15, "the TEEJET_WEB_TOKEN server's 4 valves",
+               ok=lambda listed: len(listed) >= 4)
+    by_variable = web_client.WebSocket(PORT + 1)
+    by_variable.receive()
+    answer = by_variable.answer(json.dumps(dict(stop, id=4, token=TOKEN)))
+    check(answer["type"] == "sent", f"the right token to TEEJET_WEB_TOKEN's server: {answer}")
+    print(f"200 wrong tokens: {checked} checked, {locked} refused unchecked; the right one from "
+          "another connection sent")
+
+
 def pages():
     wait_for_valves(WEB, 4, 15)
     open_pages = []
@@ -259,11 +302,12 @@ def slowpage():
 
 
 def main():
-    global WEB, WEB_LOG
+    global WEB, WEB_LOG, WEB_BY_VARIABLE
     parser = argparse.ArgumentParser()
     parser.add_argument("--gateway", required=True)
     parser.add_argument("--web", required=True)
-    parser.add_argument("case", choices=["readonly", "commands", "guards", "pages", "slowpage"])
+    parser.add_argument("case",
+                        choices=["readonly", "commands", "guards", "token", "pages", "slowpage"])
     args = parser.parse_args()
     work = tempfile.mkdtemp(prefix="teejet-web-e2e-")
     gateway_log = open(os.path.join(work, "gateway.log"), "w")
@@ -273,18 +317,30 @@ def main():
         web_args.append("--allow-commands")
     if args.case == "guards":
         web_args += ["--allowed-host", "Bench-PC"]
+    WEB_BY_VARIABLE = None
+    if args.case == "token":
+        token_file = os.path.join(work, "token")
+        with open(os.open(token_file, os.O_WRONLY | os.O_CREAT, 0o600), "w") as out:
+            out.write(TOKEN + "\n")
+        web_args += ["--allow-commands", "--token-file", token_file]
+        WEB_BY_VARIABLE = subprocess.Popen(
+            [args.web, "--listen", f"127.0.0.1:{PORT + 1}", "--allow-commands"],
+            env=dict(os.environ, TEEJET_WEB_TOKEN=TOKEN),
+            stdout=open(os.path.join(work, "web-variable.log"), "w"), stderr=subprocess.STDOUT)
     gateway = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
                                stderr=subprocess.STDOUT)
     WEB = subprocess.Popen(web_args, stdout=open(web_log_path, "w"), stderr=subprocess.STDOUT)
     try:
-        {"readonly": readonly, "commands": commands, "guards": guards, "pages": pages,
-         "slowpage": slowpage}[args.case]()
+        {"readonly": readonly, "commands": commands, "guards": guards, "token": token,
+         "pages": pages, "slowpage": slowpage}[args.case]()
     except (Failure, Timeout) as failure:
         print(f"FAIL: {failure}")
         print(open(web_log_path).read())
         return 1
     finally:
-        for proc in (WEB, gateway):
+        for proc in (WEB, WEB_BY_VARIABLE, gateway):
+            if proc is None:
+                continue
             proc.terminate()
             try:
                 proc.wait(timeout=10)

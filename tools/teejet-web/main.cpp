@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -25,6 +26,7 @@
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/stop_signals.hpp"
+#include "token_file.hpp"
 #include "web_assets.hpp"
 
 namespace {
@@ -41,10 +43,45 @@ struct Options {
   int domain = 0;
   std::string profile_file;
   bool allow_commands = false;
-  std::string token;
+  std::string token;  // after parse(): from --token, --token-file or TEEJET_WEB_TOKEN
+  std::string token_file;
   std::string www;
   std::vector<std::string> allowed_hosts;  // after parse(): lower case, checked
 };
+
+// One of --token-file, TEEJET_WEB_TOKEN and --token; nothing when none is given.
+std::optional<int> take_token(Options& options) {
+  const char* variable = std::getenv("TEEJET_WEB_TOKEN");
+  const int sources = !options.token.empty() + !options.token_file.empty() + (variable != nullptr);
+  if (sources == 0) return std::nullopt;
+  if (sources > 1) {
+    std::cerr << "teejet-web: give the token one way: --token-file, TEEJET_WEB_TOKEN or --token\n";
+    return kExitUsage;
+  }
+  if (!options.allow_commands) {
+    std::cerr << "teejet-web: a token (--token-file, TEEJET_WEB_TOKEN or --token) needs "
+                 "--allow-commands\n";
+    return kExitUsage;
+  }
+  if (!options.token_file.empty()) {
+    const auto token = web::read_token_file(options.token_file);
+    if (!token) {
+      std::cerr << "teejet-web: " << token.error().reason << '\n';
+      return kExitUsage;
+    }
+    options.token = *token;
+  } else if (variable != nullptr) {
+    options.token = variable;
+    if (options.token.empty()) {
+      std::cerr << "teejet-web: TEEJET_WEB_TOKEN is empty\n";
+      return kExitUsage;
+    }
+  } else {
+    std::cerr << "teejet-web: warning: --token is visible to every local user (ps, "
+                 "/proc/PID/cmdline); use --token-file or TEEJET_WEB_TOKEN\n";
+  }
+  return std::nullopt;
+}
 
 // Nothing when teejet-web goes on; otherwise the status to exit with, the reason printed.
 std::optional<int> parse(int argc, char** argv, Options& options) {
@@ -66,7 +103,11 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
                  "on loopback, localhost are allowed already");
   app.add_flag("--allow-commands", options.allow_commands,
                "accept commands from the page (read-only otherwise)");
-  app.add_option("--token", options.token, "with --allow-commands: every command must carry it");
+  app.add_option("--token-file", options.token_file,
+                 "with --allow-commands: every command must carry the token in FILE (mode 600); "
+                 "or set TEEJET_WEB_TOKEN");
+  app.add_option("--token", options.token,
+                 "the same on the command line, which local users can read: for a bench only");
   app.add_option("--www", options.www,
                  "directory of the page (default: www next to the executable, then "
                  "../share/teejet-web/www)");
@@ -88,11 +129,7 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
     }
     name = *allowed;
   }
-  if (!options.token.empty() && !options.allow_commands) {
-    std::cerr << "teejet-web: --token needs --allow-commands\n";
-    return kExitUsage;
-  }
-  return std::nullopt;
+  return take_token(options);
 }
 
 Result<std::filesystem::path> find_page(const Options& options) {

@@ -8,6 +8,7 @@
 #include "teejet/client/command_check.hpp"
 #include "teejet/client/json.hpp"
 #include "teejet/codec/table.hpp"
+#include "token_guard.hpp"
 
 namespace teejet::web {
 namespace {
@@ -261,7 +262,8 @@ json command_policy_json(const CommandPolicy& policy) {
 }
 
 json handle_page_message(std::string_view text, const client::ValveTable& table,
-                         const CommandPolicy& policy, CommandSender& sender) {
+                         const CommandPolicy& policy, CommandSender& sender,
+                         const TokenCheck& check_token) {
   // Parsed once; the id is echoed even when the command is refused.
   const auto message = read_message(text);
   const json id = echoed_id(message);
@@ -272,9 +274,16 @@ json handle_page_message(std::string_view text, const client::ValveTable& table,
   if (!message) return refuse(message.error().reason);
   // What is not even an object is refused below for what it is; it can carry no command.
   if (!policy.token.empty() && message->is_object()) {
-    const bool match = message->contains("token") && message->at("token").is_string() &&
-                       message->at("token").get<std::string>() == policy.token;
-    if (!match) return refuse("missing or wrong \"token\"");
+    constexpr const char* kWrongToken = "missing or wrong \"token\"";
+    if (!message->contains("token") || !message->at("token").is_string()) {
+      return refuse(kWrongToken);
+    }
+    const auto& token = message->at("token").get_ref<const std::string&>();
+    if (check_token) {
+      if (const auto refusal = check_token(token)) return refuse(*refusal);
+    } else if (!tokens_equal(token, policy.token)) {
+      return refuse(kWrongToken);
+    }
   }
   const auto checked = check_page_command(*message, table);
   if (!checked) return refuse(checked.error().reason);

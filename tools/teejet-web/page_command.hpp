@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -66,12 +67,17 @@ nlohmann::json page_protocol_json();
 // page that needs a token asks for one: {"allowed":true,"token_required":false}. Never the token.
 nlohmann::json command_policy_json(const CommandPolicy& policy);
 
+// The refusal of a token, nullopt when it is accepted: a TokenGuard in teejet-web.
+using TokenCheck = std::function<std::optional<std::string>(std::string_view token)>;
+
 // The answer to one message from the page:
 // {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did
 // not take has "error":"why" instead of "command_id") or
 // {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" when it is a number
-// or a string of at most kMaxIdBytes, null otherwise.
+// or a string of at most kMaxIdBytes, null otherwise. With a token in `policy`, a message's
+// "token" goes to `check_token` (when given; compared with the policy's otherwise).
 nlohmann::json handle_page_message(std::string_view text, const client::ValveTable& table,
-                                   const CommandPolicy& policy, CommandSender& sender);
+                                   const CommandPolicy& policy, CommandSender& sender,
+                                   const TokenCheck& check_token = {});
 
 }  // namespace teejet::web

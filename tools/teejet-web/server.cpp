@@ -2,8 +2,11 @@
 
 #include <civetweb.h>
 
+#include <chrono>
+#include <cstdint>
 #include <cstring>
 #include <iostream>
+#include <optional>
 #include <string_view>
 #include <utility>
 
@@ -68,7 +71,11 @@ Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, clie
 }
 
 Server::Server(const ServerOptions& options, client::ValveView& view, DdsSender& sender)
-    : policy_(options.policy), hosts_(options.hosts), view_(view), sender_(sender) {}
+    : policy_(options.policy),
+      hosts_(options.hosts),
+      tokens_(options.policy.token, [] { return std::chrono::steady_clock::now(); }),
+      view_(view),
+      sender_(sender) {}
 
 Server::~Server() {
   if (context_ != nullptr) mg_stop(context_);
@@ -143,8 +150,18 @@ int Server::message(mg_connection* connection, int flags, char* text, std::size_
   const int opcode = flags & 0x0f;
   if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
   if (opcode != MG_WEBSOCKET_OPCODE_TEXT) return 1;
-  const nlohmann::json answer =
-      handle_page_message({text, length}, server.view_.snapshot(), server.policy_, server.sender_);
+  const auto check_token = [&](std::string_view token) -> std::optional<std::string> {
+    const auto answer = server.tokens_.check(reinterpret_cast<std::uintptr_t>(connection), token);
+    if (!answer.log.empty()) {
+      const mg_request_info* peer = mg_get_request_info(connection);
+      std::cerr << "teejet-web: " << answer.log << " (from " << peer->remote_addr << " port "
+                << peer->remote_port << ")\n";
+    }
+    if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
+    return TokenGuard::reason(answer);
+  };
+  const nlohmann::json answer = handle_page_message({text, length}, server.view_.snapshot(),
+                                                    server.policy_, server.sender_, check_token);
   std::lock_guard lock(server.mutex_);
   if (const auto page = server.pages_.find(connection); page != server.pages_.end()) {
     post(*page->second, answer);
@@ -162,6 +179,7 @@ void Server::close(const mg_connection* connection, void* data) {
     page = std::move(found->second);
     server.pages_.erase(found);
   }
+  server.tokens_.forget(reinterpret_cast<std::uintptr_t>(connection));
   // Joined here, out of the lock: the ticks of the other pages go on meanwhile.
   page.reset();
 }

@@ -18,6 +18,7 @@
 #include "sender.hpp"
 #include "teejet/client/valve_view.hpp"
 #include "teejet/core/result.hpp"
+#include "token_guard.hpp"
 
 struct mg_connection;
 struct mg_context;
@@ -61,6 +62,7 @@ class Server {
 
   const CommandPolicy policy_;
   const AllowedHosts hosts_;
+  TokenGuard tokens_;  // unused without a token
   client::ValveView& view_;
   DdsSender& sender_;
   std::mutex mutex_;
