@@ -25,7 +25,7 @@ s.bind(("", port))
 if group != "-":
     s.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP,
                  struct.pack("4s4s", socket.inet_aton(group), socket.inet_aton("0.0.0.0")))
-s.settimeout(float(sys.argv[3]))
+s.settimeout(float(sys.argv[3]) + 120)
 print("ready", flush=True)
 try:
     data, peer = s.recvfrom(100)
@@ -63,10 +63,14 @@ def datagram(lab, sender, receiver, destination, group="-", wait=2.0):
 
     if not first(lambda: "ready" in output(), 30):
         return "the listener never got ready"
+    # The listener outlives the sender however long a loaded machine takes to start it: it is
+    # stopped only once every datagram is out and it had `wait` seconds more to see one.
     lab.run(sender, [PYTHON, "-c", SEND, destination, "7400", str(int(wait / 0.05))],
-            timeout=wait + 30)
-    listener.wait(wait + 30)
-    return output()[1].strip()
+            timeout=wait + 60)
+    first(lambda: len(output()) > 2, wait)
+    lab.stop(listener)
+    lines = output()
+    return lines[1].strip() if len(lines) > 2 else "nothing"
 
 
 def shm_is_private(lab):

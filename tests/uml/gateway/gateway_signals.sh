@@ -49,7 +49,7 @@ run_case() {
   esac
   pid=$!
   pids+=("$pid")
-  check "$name: the gateway polls all three valves" eventually 15 all_polled_after "$start"
+  check "$name: the gateway polls all three valves" eventually 30 all_polled_after "$start"
   # The reader goes away as a log collector does when it is restarted: the next log line hits
   # a pipe nobody reads.
   [ "$stdout" = closed-pipe ] && exec 3<&-
