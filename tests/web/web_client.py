@@ -7,6 +7,7 @@ import os
 import socket
 import struct
 import sys
+import time
 import urllib.error
 import urllib.request
 
@@ -103,12 +104,14 @@ class WebSocket:
             elif opcode == TEXT:
                 return json.loads(payload.decode())
 
-    def close_code(self):
+    def close_code(self, deadline_s=20):
         """Reads until the server closes: its close code, or None when the connection ended
-        without a close frame."""
+        without a close frame or the server did not close within `deadline_s`."""
+        end = time.monotonic() + deadline_s
         try:
-            while True:
+            while time.monotonic() < end:
                 self.receive()
+            return None
         except Closed as closed:
             return closed.code
         except (Failure, OSError):
