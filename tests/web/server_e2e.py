@@ -24,6 +24,16 @@ client (web_client.py, standard library only) stands in for the page.
             refused; when one closes, a new page gets in.
   slowpage  a page floods teejet-web with refused commands and never reads: it is dropped, and
             meanwhile another page's move still reaches completed within the usual time.
+  frames    an unmasked frame, RSV1, opcode 0x3, a 126-byte ping and a stray continuation are
+            each closed with 1002; a command in three fragments is answered once, its first
+            fragment alone not at all.
+  oversize  frame headers claiming 2,000,000,000 bytes, then payload, on 1 and on 48 pages:
+            closed with 1009, teejet-web's VmRSS grows by less than 100 MB.
+  starvation  60 slowloris requests and 48 idle pages: /api/valves and / still answer, the 49th
+            page is refused, the idle pages and the slowloris connections are closed in time.
+  handshakes  70 handshakes at once: exactly 48 pages with their snapshot.
+  hardening path traversal 404, long URL or header 431, other methods 405, a body 400; 1,000
+            connect/close cycles and 100 pages leave the open descriptors as they were.
 
 Every wait has a deadline; every failure says what differed.
 """
