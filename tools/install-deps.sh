@@ -45,8 +45,10 @@ PACKAGES=(
   libfmt-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
-  # the HTTP and WebSocket server of teejet-web (tools/teejet-web)
-  libcivetweb-dev
+  # the HTTP and WebSocket server of teejet-web (tools/teejet-web): Boost.Beast and Asio,
+  # header-only; OpenSSL's headers for Beast's TLS streams
+  libboost-dev
+  libssl-dev
   # MCAP recordings (gateway/mcap): chunk compression and CRC-32
   libzstd-dev
   liblz4-dev
@@ -101,7 +103,8 @@ BUILD_PACKAGES=(
   libfmt-dev
   libyaml-cpp-dev
   nlohmann-json3-dev
-  libcivetweb-dev
+  libboost-dev
+  libssl-dev
   libzstd-dev
   liblz4-dev
   zlib1g-dev

@@ -7,6 +7,7 @@ import os
 import socket
 import struct
 import sys
+import time
 import urllib.error
 import urllib.request
 
@@ -18,28 +19,53 @@ class Failure(Exception):
     pass
 
 
+class Closed(Failure):
+    """The server closed the WebSocket with a close frame: `code` is its status code."""
+
+    def __init__(self, code):
+        super().__init__(f"the server closed the WebSocket with {code}")
+        self.code = code
+
+
+TEXT, CONTINUATION, CLOSE, PING, PONG = 0x1, 0x0, 0x8, 0x9, 0xA
+
+
+def upgrade_request(port, origin=None):
+    key = base64.b64encode(os.urandom(16)).decode()
+    request = (f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
+               f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
+               "Sec-WebSocket-Version: 13\r\n")
+    if origin:
+        request += f"Origin: {origin}\r\n"
+    return (request + "\r\n").encode()
+
+
 class WebSocket:
-    def __init__(self, port, origin=None, receive_buffer=None):
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        self.sock.settimeout(10)
-        if receive_buffer:
-            # Before connecting: the window the server may fill stays this small.
-            self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, receive_buffer)
-        self.sock.connect(("127.0.0.1", port))
-        key = base64.b64encode(os.urandom(16)).decode()
-        request = (f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n"
-                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\n"
-                   "Sec-WebSocket-Version: 13\r\n")
-        if origin:
-            request += f"Origin: {origin}\r\n"
-        self.sock.sendall((request + "\r\n").encode())
+    def __init__(self, port, origin=None, receive_buffer=None, sock=None):
+        if sock is None:
+            sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            sock.settimeout(10)
+            if receive_buffer:
+                # Before connecting: the window the server may fill stays this small.
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, receive_buffer)
+            sock.connect(("127.0.0.1", port))
+            sock.sendall(upgrade_request(port, origin))
+        self.sock = sock
         head = b""
-        while b"\r\n\r\n" not in head:
-            chunk = self.sock.recv(1)
-            if not chunk:
-                break
-            head += chunk
+        try:
+            while b"\r\n\r\n" not in head:
+                chunk = self.sock.recv(1)
+                if not chunk:
+                    break
+                head += chunk
+        except OSError:
+            pass
         self.status = head.split(b"\r\n")[0].decode()
+
+    @classmethod
+    def after_request(cls, sock):
+        """The WebSocket whose upgrade request was already sent on `sock`."""
+        return cls(None, sock=sock)
 
     def __repr__(self):
         return f"<WebSocket {self.status!r}>"
@@ -56,24 +82,58 @@ class WebSocket:
             data += chunk
         return data
 
-    def receive(self):
+    def receive_frame(self):
+        """One frame as it came: (opcode, payload). Server frames are never masked."""
         head = self._exact(2)
         length = head[1] & 0x7F
         if length == 126:
             length = struct.unpack(">H", self._exact(2))[0]
         elif length == 127:
             length = struct.unpack(">Q", self._exact(8))[0]
-        return json.loads(self._exact(length).decode())
+        return head[0] & 0x0F, self._exact(length)
+
+    def receive(self):
+        """The next text message as JSON, answering pings (a browser does) on the way; Closed
+        when the server closes."""
+        while True:
+            opcode, payload = self.receive_frame()
+            if opcode == PING:
+                self.sock.sendall(self.frame(payload, opcode=PONG))
+            elif opcode == CLOSE:
+                raise Closed(struct.unpack(">H", payload[:2])[0] if len(payload) >= 2 else None)
+            elif opcode == TEXT:
+                return json.loads(payload.decode())
+
+    def close_code(self, deadline_s=20):
+        """Reads until the server closes: its close code, or None when the connection ended
+        without a close frame or the server did not close within `deadline_s`."""
+        end = time.monotonic() + deadline_s
+        try:
+            while time.monotonic() < end:
+                self.receive()
+            return None
+        except Closed as closed:
+            return closed.code
+        except (Failure, OSError):
+            return None
 
     @staticmethod
-    def frame(text):
-        data = text.encode()
-        mask = os.urandom(4)
-        n = len(data)
+    def frame(data, opcode=TEXT, fin=True, rsv=0, masked=True, length=None):
+        """A client frame; `length` claims another payload length than the data's."""
+        if isinstance(data, str):
+            data = data.encode()
+        n = len(data) if length is None else length
+        first = (0x80 if fin else 0) | (rsv << 4) | opcode
+        mask_bit = 0x80 if masked else 0
         if n < 126:
-            head = bytes([0x81, 0x80 | n])
+            head = bytes([first, mask_bit | n])
+        elif n < 65536:
+            head = bytes([first, mask_bit | 126]) + struct.pack(">H", n)
         else:
-            head = bytes([0x81, 0x80 | 126]) + struct.pack(">H", n)
+            head = bytes([first, mask_bit | 127]) + struct.pack(">Q", n)
+        if not masked:
+            return head + data
+        mask = os.urandom(4)
         return head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(data))
 
     def send(self, text):
@@ -108,10 +168,10 @@ def raw_http(port, path, host, extra=""):
     return lines[0], headers, body.decode(errors="replace")
 
 
-def http_get(port, path, method="GET"):
+def http_get(port, path, method="GET", deadline_s=5):
     request = urllib.request.Request(f"http://127.0.0.1:{port}{path}", method=method)
     try:
-        with urllib.request.urlopen(request, timeout=5) as response:
+        with urllib.request.urlopen(request, timeout=deadline_s) as response:
             return response.status, response.read().decode()
     except urllib.error.HTTPError as error:
         return error.code, ""

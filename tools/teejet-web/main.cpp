@@ -1,7 +1,7 @@
 // teejet-web: the bench dashboard's server (issue 13). A DDS participant that keeps the client's
 // table of valves and serves it over HTTP (GET /api/valves) and a WebSocket (/ws) that pushes one
 // batched update per tick and, with --allow-commands, takes commands. The JSON is the core's
-// (dashboard_json, page_command), DDS commands the sender's, CivetWeb the server's: this file is
+// (dashboard_json, page_command), DDS commands the sender's, HTTP the server's: this file is
 // the command line and the order of the steps.
 
 #include <CLI/CLI.hpp>
@@ -39,7 +39,7 @@ constexpr int kExitUsage = 2;
 constexpr auto kTickPeriod = std::chrono::milliseconds(40);
 
 struct Options {
-  std::string listen = web::kDefaultListen;  // after parse(): CivetWeb's listening_ports
+  std::string listen = web::kDefaultListen;  // after parse(): "ADDRESS:PORT", a literal address
   int domain = 0;
   std::string profile_file;
   bool allow_commands = false;

@@ -4,39 +4,30 @@
 
 namespace teejet::web {
 
-PageOutbox::PageOutbox(Write write) : write_(std::move(write)) {}
-
-PageOutbox::~PageOutbox() = default;
-
 bool PageOutbox::post(const nlohmann::json& message) {
-  std::lock_guard lock(mutex_);
   if (dropped_) return false;
-  if (outbox_.size() >= kMaxQueuedMessages) {
+  if (waiting_.size() >= kMaxQueuedMessages) {
     dropped_ = true;
-    outbox_.clear();
-    wake_.notify_one();
+    waiting_.clear();
     return true;
   }
-  outbox_.push_back(message.dump());
-  wake_.notify_one();
+  waiting_.push_back(message.dump());
   return false;
 }
 
-void PageOutbox::run(const std::stop_token& stop) {
-  std::unique_lock lock(mutex_);
-  while (wake_.wait(lock, stop, [this] { return dropped_ || !outbox_.empty(); })) {
-    if (dropped_) {
-      lock.unlock();
-      static constexpr char kPolicyViolation[] = {0x03, static_cast<char>(0xF0)};  // 1008
-      write_(Frame::kClose, {kPolicyViolation, 2});
-      return;
-    }
-    const std::string text = std::move(outbox_.front());
-    outbox_.pop_front();
-    lock.unlock();
-    write_(Frame::kText, text);
-    lock.lock();
+std::optional<PageOutbox::Write> PageOutbox::start_write() {
+  if (writing_ || closed_) return std::nullopt;
+  if (dropped_) {
+    writing_ = closed_ = true;
+    return Write{Frame::kClose, {}};
   }
+  if (waiting_.empty()) return std::nullopt;
+  writing_ = true;
+  Write next{Frame::kText, std::move(waiting_.front())};
+  waiting_.pop_front();
+  return next;
 }
+
+void PageOutbox::write_done() { writing_ = false; }
 
 }  // namespace teejet::web

@@ -1,54 +1,52 @@
 #pragma once
 
-// One open page's outbox. Its messages are written by a thread of its own, so that a page that
-// stops reading (a stalled browser, a dead link) blocks only that thread and never the tick that
-// feeds every page. No CivetWeb here: the server hands in the function that writes a frame.
+// One open page's outbox: the messages waiting for their WebSocket write, bounded, so that a page
+// that stops reading (a stalled browser, a dead link) costs a bounded amount of memory and is
+// dropped, while the tick that feeds every page never waits for it. No network and no threads:
+// the server's one I/O thread posts, takes the next frame to write and says when a write is done,
+// one write at a time (as a WebSocket stream allows).
 
-#include <condition_variable>
 #include <cstddef>
 #include <deque>
-#include <functional>
-#include <mutex>
 #include <nlohmann/json.hpp>
-#include <stop_token>
+#include <optional>
 #include <string>
-#include <string_view>
-#include <thread>
 
 namespace teejet::web {
 
-// A page with this many messages not yet written (10 s of ticks) is not reading: it is dropped.
+// A page with this many messages waiting behind the one being written (10 s of ticks) is not
+// reading: it is dropped.
 inline constexpr std::size_t kMaxQueuedMessages = 250;
+
+// The close of a dropped page: 1008, policy violation.
+inline constexpr unsigned kPolicyViolation = 1008;
 
 class PageOutbox {
  public:
   enum class Frame { kText, kClose };
-  // Writes one WebSocket frame to the page. It may block as long as the page does not read, and
-  // must fail at once when the connection is closed (CivetWeb's write does both).
-  using Write = std::function<void(Frame frame, std::string_view payload)>;
-
-  explicit PageOutbox(Write write);
-  // Joins the writer: the server lets an outbox go in CivetWeb's close callback, once the
-  // connection is done, so a write still under way fails at once.
-  ~PageOutbox();
-  PageOutbox(const PageOutbox&) = delete;
-  PageOutbox& operator=(const PageOutbox&) = delete;
+  struct Write {
+    Frame frame;
+    std::string text;  // empty for the close
+    bool operator==(const Write&) const = default;
+  };
 
   // Queues `message`; true when that dropped the page (the caller says so once). A page whose
-  // outbox reaches kMaxQueuedMessages is dropped: its outbox is emptied, it is fed no more and is
-  // sent one close, 1008 policy violation (the browser reconnects and starts from a snapshot).
+  // outbox already holds kMaxQueuedMessages is dropped: its outbox is emptied, it is fed no more
+  // and its next write is one close, 1008 (the browser reconnects and starts from a snapshot).
   bool post(const nlohmann::json& message);
 
- private:
-  void run(const std::stop_token& stop);
+  // The next frame to write, when none is being written and one waits; it is then being written
+  // until write_done(). After the close, nothing more.
+  std::optional<Write> start_write();
+  void write_done();
 
-  const Write write_;
-  std::mutex mutex_;
-  std::condition_variable_any wake_;
-  std::deque<std::string> outbox_;
+  bool dropped() const { return dropped_; }
+
+ private:
+  std::deque<std::string> waiting_;
+  bool writing_ = false;
   bool dropped_ = false;
-  // Last: started once the members it uses exist, stopped and joined before they go.
-  std::jthread writer_{[this](const std::stop_token& stop) { run(stop); }};
+  bool closed_ = false;  // the close was handed out
 };
 
 }  // namespace teejet::web

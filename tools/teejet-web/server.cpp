@@ -1,194 +1,485 @@
+// The only translation unit with Boost.Beast and Asio in it: they take half a minute to compile,
+// so nothing else of teejet-web includes them.
+
 #include "server.hpp"
 
-#include <civetweb.h>
-
+#include <algorithm>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/websocket.hpp>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
-#include <cstring>
+#include <cstdlib>
 #include <iostream>
 #include <optional>
+#include <set>
+#include <string>
 #include <string_view>
+#include <thread>
 #include <utility>
+#include <vector>
 
 #include "dashboard_json.hpp"
+#include "page_admission.hpp"
+#include "page_files.hpp"
 #include "page_outbox.hpp"
+#include "request_guard.hpp"
+#include "token_guard.hpp"
 
 namespace teejet::web {
 namespace {
 
-// CivetWeb gives every open WebSocket a worker thread for its whole life. Pages beyond this many
-// are refused, so that the threads left over always serve the page files and /api/valves.
-constexpr std::size_t kMaxPages = 48;
-constexpr std::size_t kHttpThreads = 8;
+namespace asio = boost::asio;
+namespace beast = boost::beast;
+namespace http = beast::http;
+namespace websocket = beast::websocket;
+using tcp = asio::ip::tcp;
+using namespace std::chrono_literals;
 
-void write_frame(mg_connection* connection, PageOutbox::Frame frame, std::string_view data) {
-  const int opcode = frame == PageOutbox::Frame::kText ? MG_WEBSOCKET_OPCODE_TEXT
-                                                       : MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE;
-  mg_lock_connection(connection);
-  mg_websocket_write(connection, opcode, data.data(), data.size());
-  mg_unlock_connection(connection);
+// Open connections of every kind (requests, keep-alive, pages). At the cap a new connection is
+// closed at accept: the ones open keep their service, and each of them times out on its own.
+constexpr std::size_t kMaxConnections = 256;
+// A request line and headers beyond this are answered 431 and closed; no request has a body.
+constexpr std::uint32_t kMaxHeaderBytes = 8 * 1024;
+// From accept, or from the previous response of a keep-alive connection, to a whole request's
+// headers: both the idle keep-alive timeout and the end of a request dribbled byte by byte.
+constexpr auto kRequestDeadline = 10s;
+// A WebSocket's opening and closing handshakes.
+constexpr auto kHandshakeTimeout = 10s;
+// A page that answers nothing (not even the pings sent after half of it) is closed. Browsers
+// answer pings by themselves. TEEJET_WEB_PAGE_IDLE_S sets it for the tests.
+constexpr auto kPageIdleTimeout = 30s;
+
+using Request = http::request<http::empty_body>;
+using Response = http::response<http::string_body>;
+
+// The one place where the headers every response carries (the WebSocket's 101 too) are set:
+// request_guard's security headers and ours.
+template <class Fields>
+void set_response_headers(Fields& fields) {
+  fields.set(http::field::server, "teejet-web");
+  fields.set(http::field::cache_control, "no-store");
+  std::string_view lines = kSecurityHeaders;
+  while (!lines.empty()) {
+    const auto end = std::min(lines.find("\r\n"), lines.size());
+    const std::string_view line = lines.substr(0, end);
+    const auto colon = line.find(": ");
+    const std::string_view value = line.substr(colon + 2);
+    fields.set(beast::string_view(line.data(), colon),
+               beast::string_view(value.data(), value.size()));
+    lines.remove_prefix(std::min(end + 2, lines.size()));
+  }
+}
+
+std::chrono::seconds page_idle_timeout() {
+  const char* text = std::getenv("TEEJET_WEB_PAGE_IDLE_S");
+  const long seconds = text == nullptr ? 0 : std::strtol(text, nullptr, 10);
+  return seconds > 0 ? std::chrono::seconds(seconds) : kPageIdleTimeout;
+}
+
+std::optional<std::string_view> header(const Request& request, http::field field) {
+  const auto found = request.find(field);
+  if (found == request.end()) return std::nullopt;
+  return std::string_view(found->value().data(), found->value().size());
 }
 
 }  // namespace
 
-// One open WebSocket: its outbox, and what it was last sent.
-struct Server::Page {
-  explicit Page(mg_connection* connection)
-      : outbox([connection](PageOutbox::Frame frame, std::string_view data) {
-          write_frame(connection, frame, data);
-        }) {}
-
-  PageOutbox outbox;
-  UpdateBatcher batcher;  // under Server::mutex_
+// One open page as the tick sees it, whatever stream it is on. Not in the anonymous namespace:
+// Server::Impl holds pointers to it.
+class ServedPage {
+ public:
+  virtual ~ServedPage() = default;
+  virtual void deliver(const nlohmann::json& message) = 0;
+  UpdateBatcher batcher;
 };
+
+struct Server::Impl {
+  Impl(const ServerOptions& options, client::ValveView& valve_view, DdsSender& dds_sender,
+       PageFiles page_files)
+      : policy(options.policy),
+        hosts(options.hosts),
+        tokens(options.policy.token, [] { return std::chrono::steady_clock::now(); }),
+        view(valve_view),
+        sender(dds_sender),
+        files(std::move(page_files)) {}
+
+  void accept();
+  void feed_pages(const std::vector<CommandStatus>& statuses, std::uint64_t stamp_ms);
+  Response respond(const Request& request) const;
+
+  const CommandPolicy policy;
+  const AllowedHosts hosts;
+  TokenGuard tokens;  // unused without a token
+  client::ValveView& view;
+  DdsSender& sender;
+  const PageFiles files;
+  const std::chrono::seconds page_idle = page_idle_timeout();
+  // Touched on the I/O thread only. Declared before the io_context: the sessions that its
+  // handlers still own when it goes count themselves out of these.
+  std::size_t connections = 0;
+  std::size_t admitted_pages = 0;  // counted at admission, before the 101 is written
+  std::set<ServedPage*> pages;     // those that got their 101, fed by the tick
+  bool said_full = false;
+  asio::io_context io{1};
+  tcp::acceptor acceptor{io};
+  asio::steady_timer accept_retry{io};
+  asio::executor_work_guard<asio::io_context::executor_type> work{io.get_executor()};
+  std::thread thread;
+};
+
+namespace {
+
+// A connection's place under kMaxConnections, from accept to the socket's close; it moves from
+// the HTTP session into the page's.
+class ConnectionSlot {
+ public:
+  explicit ConnectionSlot(Server::Impl& server) : server_(&server) { ++server.connections; }
+  ConnectionSlot(ConnectionSlot&& other) noexcept
+      : server_(std::exchange(other.server_, nullptr)) {}
+  ConnectionSlot& operator=(ConnectionSlot&&) = delete;
+  ~ConnectionSlot() {
+    if (server_ != nullptr) --server_->connections;
+  }
+
+ private:
+  Server::Impl* server_;
+};
+
+// A page's WebSocket on `Stream` (beast::tcp_stream; an ssl_stream over it for TLS). Admitted
+// already: it holds one of kMaxPages from its construction to its destruction.
+template <class Stream>
+class PageSession final : public ServedPage,
+                          public std::enable_shared_from_this<PageSession<Stream>> {
+ public:
+  PageSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot)
+      : server_(server), socket_(std::move(stream)), slot_(std::move(slot)) {
+    ++server_.admitted_pages;
+    beast::error_code ignored;
+    peer_ = beast::get_lowest_layer(socket_).socket().remote_endpoint(ignored);
+  }
+  ~PageSession() override {
+    server_.pages.erase(this);
+    server_.tokens.forget(token_key());
+    --server_.admitted_pages;
+  }
+
+  void accept(Request request) {
+    socket_.set_option(websocket::stream_base::timeout{kHandshakeTimeout, server_.page_idle, true});
+    socket_.set_option(websocket::stream_base::decorator(
+        [](websocket::response_type& response) { set_response_headers(response); }));
+    // A longer message is refused from its frame header, before any of it is buffered (1009).
+    socket_.read_message_max(kMaxCommandBytes);
+    // Each message one frame, as the page and the test clients have always had them.
+    socket_.auto_fragment(false);
+    socket_.async_accept(request, [self = this->shared_from_this()](beast::error_code error) {
+      self->on_accept(error);
+    });
+  }
+
+  void deliver(const nlohmann::json& message) override {
+    if (closed_) return;
+    if (outbox_.post(message)) {
+      std::cerr << "teejet-web: a page stopped reading (" << kMaxQueuedMessages
+                << " messages waiting): dropped\n";
+    }
+    write_next();
+  }
+
+ private:
+  void on_accept(beast::error_code error) {
+    if (error) return;
+    server_.pages.insert(this);
+    const DashboardFrame frame = dashboard_frame(server_.view.snapshot(), server_.sender.targets());
+    nlohmann::json snapshot = batcher.snapshot(frame);
+    snapshot["commands"] = command_policy_json(server_.policy);
+    snapshot["protocol"] = page_protocol_json();
+    deliver(snapshot);
+    read();
+  }
+
+  void read() {
+    socket_.async_read(input_, [self = this->shared_from_this()](
+                                   beast::error_code error, std::size_t) { self->on_read(error); });
+  }
+
+  // Beast has checked the frames (masking, RSV bits, opcodes, control frames, fragments) and put
+  // a fragmented message together: a protocol error has been answered with close 1002 already.
+  void on_read(beast::error_code error) {
+    if (error) {
+      stop_feeding();
+      return;
+    }
+    if (socket_.got_text()) {
+      const std::string text = beast::buffers_to_string(input_.data());
+      const auto check_token = [this](std::string_view token) -> std::optional<std::string> {
+        const auto answer = server_.tokens.check(token_key(), token);
+        if (!answer.log.empty()) {
+          std::cerr << "teejet-web: " << answer.log << " (from " << peer_.address().to_string()
+                    << " port " << peer_.port() << ")\n";
+        }
+        if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
+        return TokenGuard::reason(answer);
+      };
+      deliver(handle_page_message(text, server_.view.snapshot(), server_.policy, server_.sender,
+                                  check_token));
+    }
+    input_.consume(input_.size());
+    read();
+  }
+
+  void write_next() {
+    auto next = outbox_.start_write();
+    if (!next) return;
+    auto self = this->shared_from_this();
+    if (next->frame == PageOutbox::Frame::kClose) {
+      socket_.async_close(websocket::close_code::policy_error,
+                          [self](beast::error_code) { self->stop_feeding(); });
+      return;
+    }
+    writing_ = std::move(next->text);
+    socket_.text(true);
+    socket_.async_write(asio::buffer(writing_), [self](beast::error_code error, std::size_t) {
+      if (error) {
+        self->stop_feeding();
+        return;
+      }
+      self->outbox_.write_done();
+      self->write_next();
+    });
+  }
+
+  void stop_feeding() {
+    closed_ = true;
+    server_.pages.erase(this);
+  }
+
+  std::uint64_t token_key() const { return reinterpret_cast<std::uintptr_t>(this); }
+
+  Server::Impl& server_;
+  websocket::stream<Stream> socket_;
+  ConnectionSlot slot_;
+  beast::flat_buffer input_;
+  tcp::endpoint peer_;  // for the log: the socket may be closed by then
+  PageOutbox outbox_;
+  std::string writing_;  // the text being written: the write reads it until it completes
+  bool closed_ = false;
+};
+
+// One HTTP connection on `Stream`: requests one after the other (keep-alive), until one is an
+// admitted WebSocket upgrade, which goes on as a PageSession.
+template <class Stream>
+class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream>> {
+ public:
+  HttpSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot)
+      : server_(server), stream_(std::move(stream)), slot_(std::move(slot)) {}
+
+  void read_request() {
+    parser_.emplace();
+    head_ = false;
+    parser_->header_limit(kMaxHeaderBytes);
+    beast::get_lowest_layer(stream_).expires_after(kRequestDeadline);
+    http::async_read(stream_, buffer_, *parser_,
+                     [self = this->shared_from_this()](beast::error_code error, std::size_t) {
+                       self->on_request(error);
+                     });
+  }
+
+ private:
+  void on_request(beast::error_code error) {
+    if (error == http::error::header_limit)
+      return refuse(http::status::request_header_fields_too_large);
+    if (error == http::error::end_of_stream || error == beast::error::timeout) return close();
+    if (error) {
+      // A body (none is ever wanted), a malformed request line or header.
+      if (error.category() == beast::error_code(http::error::bad_target).category()) {
+        return refuse(http::status::bad_request);
+      }
+      return close();
+    }
+    Request request = parser_->release();
+    head_ = request.method() == http::verb::head;
+    // Before any route: a name teejet-web does not serve under is a rebound one (request_guard).
+    const auto host = header(request, http::field::host);
+    if (!host || !host_allowed(*host, server_.hosts)) return write_raw(forbidden_host_answer());
+    if (websocket::is_upgrade(request) && request.target() == "/ws")
+      return upgrade(std::move(request));
+    write(server_.respond(request));
+  }
+
+  // The one place a page is admitted.
+  void upgrade(Request request) {
+    const auto refusal =
+        refuse_page(header(request, http::field::origin), server_.hosts, server_.admitted_pages);
+    if (refusal) {
+      Response response{static_cast<http::status>(refusal->status), request.version()};
+      response.set(http::field::content_type, "text/plain; charset=utf-8");
+      response.body() = refusal->reason + "\n";
+      response.keep_alive(false);
+      return write(std::move(response));
+    }
+    beast::get_lowest_layer(stream_).expires_never();  // the WebSocket's own timeouts from here
+    std::make_shared<PageSession<Stream>>(server_, std::move(stream_), std::move(slot_))
+        ->accept(std::move(request));
+  }
+
+  void refuse(http::status status) {
+    Response response{status, 11};
+    response.set(http::field::content_type, "text/plain; charset=utf-8");
+    response.body() = std::string(http::obsolete_reason(status)) + "\n";
+    response.keep_alive(false);
+    write(std::move(response));
+  }
+
+  void write(Response response) {
+    set_response_headers(response);
+    response.content_length(response.body().size());
+    if (head_) response.body().clear();
+    response_ = std::move(response);
+    http::async_write(stream_, response_,
+                      [self = this->shared_from_this()](beast::error_code error, std::size_t) {
+                        if (error || !self->response_.keep_alive()) return self->close();
+                        self->read_request();
+                      });
+  }
+
+  // An answer request_guard wrote whole, then the connection closed.
+  void write_raw(std::string answer) {
+    raw_ = std::move(answer);
+    asio::async_write(
+        stream_, asio::buffer(raw_),
+        [self = this->shared_from_this()](beast::error_code, std::size_t) { self->close(); });
+  }
+
+  void close() {
+    beast::error_code ignored;
+    beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_send, ignored);
+    beast::get_lowest_layer(stream_).close();
+  }
+
+  Server::Impl& server_;
+  Stream stream_;
+  ConnectionSlot slot_;
+  beast::flat_buffer buffer_;
+  std::optional<http::request_parser<http::empty_body>> parser_;
+  Response response_;
+  std::string raw_;
+  bool head_ = false;
+};
+
+Result<tcp::endpoint> endpoint(const std::string& listen) {
+  const auto colon = listen.rfind(':');
+  std::string host = listen.substr(0, colon);
+  if (host.size() > 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
+  beast::error_code error;
+  const auto address = asio::ip::make_address(host, error);
+  if (colon == std::string::npos || error) {
+    return Error{ErrorCode::kUnavailable, "cannot listen on " + listen};
+  }
+  return tcp::endpoint(address, static_cast<unsigned short>(std::stoi(listen.substr(colon + 1))));
+}
+
+}  // namespace
+
+Response Server::Impl::respond(const Request& request) const {
+  Response response{http::status::ok, request.version()};
+  response.keep_alive(request.keep_alive());
+  const auto text = [&](http::status status, std::string body) {
+    response.result(status);
+    response.set(http::field::content_type, "text/plain; charset=utf-8");
+    response.body() = std::move(body);
+  };
+  if (request.method() != http::verb::get && request.method() != http::verb::head) {
+    text(http::status::method_not_allowed, "GET or HEAD only\n");
+    response.set(http::field::allow, "GET, HEAD");
+    return response;
+  }
+  const std::string_view target(request.target().data(), request.target().size());
+  if (target == "/api/valves") {
+    response.set(http::field::content_type, "application/json");
+    response.body() = valves_json(view.snapshot(), sender.targets()).dump();
+  } else if (const PageFile* file = files.find(target)) {
+    response.set(http::field::content_type, file->content_type);
+    response.body() = file->body;
+  } else {
+    text(http::status::not_found, "not found\n");
+  }
+  return response;
+}
+
+void Server::Impl::accept() {
+  acceptor.async_accept([this](beast::error_code error, tcp::socket socket) {
+    if (error == asio::error::operation_aborted) return;
+    if (error) {
+      // Out of descriptors, most likely: wait for some to close instead of spinning.
+      accept_retry.expires_after(100ms);
+      accept_retry.async_wait([this](beast::error_code) { accept(); });
+      return;
+    }
+    if (connections >= kMaxConnections) {
+      if (!std::exchange(said_full, true)) {
+        std::cerr << "teejet-web: " << kMaxConnections << " connections open: refusing more\n";
+      }
+      socket.close(error);
+    } else {
+      said_full = false;
+      socket.set_option(tcp::no_delay(true), error);
+      auto session = std::make_shared<HttpSession<beast::tcp_stream>>(
+          *this, beast::tcp_stream(std::move(socket)), ConnectionSlot(*this));
+      session->read_request();
+    }
+    accept();
+  });
+}
+
+void Server::Impl::feed_pages(const std::vector<CommandStatus>& statuses, std::uint64_t stamp_ms) {
+  // With no page open (most of a bench's day) there is nobody to build a frame for; a page that
+  // opens starts from a snapshot of its own.
+  if (pages.empty()) return;
+  const DashboardFrame frame = dashboard_frame(view.snapshot(), sender.targets());
+  for (ServedPage* page : pages) {
+    for (const CommandStatus& status : statuses) page->batcher.add_status(status);
+    if (const auto update = page->batcher.tick(frame, stamp_ms)) page->deliver(*update);
+  }
+}
 
 Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, client::ValveView& view,
                                               DdsSender& sender) {
-  std::unique_ptr<Server> server(new Server(options, view, sender));
-  mg_init_library(0);
-  const std::string document_root = options.www.string();
-  const std::string threads = std::to_string(kMaxPages + kHttpThreads);
-  const char* server_options[] = {"listening_ports",
-                                  options.listen.c_str(),
-                                  "num_threads",
-                                  threads.c_str(),
-                                  "document_root",
-                                  document_root.c_str(),
-                                  "enable_directory_listing",
-                                  "no",
-                                  "additional_header",
-                                  kSecurityHeaders,
-                                  nullptr};
-  mg_callbacks callbacks{};
-  callbacks.begin_request = admit;
-  server->context_ = mg_start(&callbacks, server.get(), server_options);
-  if (server->context_ == nullptr) {
-    return Error{ErrorCode::kUnavailable, "cannot listen on " + options.listen};
+  auto files = PageFiles::load(options.www);
+  if (!files) return files.error();
+  const auto address = endpoint(options.listen);
+  if (!address) return address.error();
+  auto impl = std::make_unique<Impl>(options, view, sender, std::move(*files));
+  beast::error_code error;
+  impl->acceptor.open(address->protocol(), error);
+  if (!error) impl->acceptor.set_option(tcp::acceptor::reuse_address(true), error);
+  if (!error) impl->acceptor.bind(*address, error);
+  if (!error) impl->acceptor.listen(asio::socket_base::max_listen_connections, error);
+  if (error) {
+    return Error{ErrorCode::kUnavailable,
+                 "cannot listen on " + options.listen + ": " + error.message()};
   }
-  mg_set_request_handler(server->context_, "/api/valves$", valves, server.get());
-  mg_set_websocket_handler(server->context_, "/ws$", connect, ready, message, close, server.get());
-  return server;
+  impl->accept();
+  impl->thread = std::thread([&io = impl->io] { io.run(); });
+  return std::unique_ptr<Server>(new Server(std::move(impl)));
 }
 
-Server::Server(const ServerOptions& options, client::ValveView& view, DdsSender& sender)
-    : policy_(options.policy),
-      hosts_(options.hosts),
-      tokens_(options.policy.token, [] { return std::chrono::steady_clock::now(); }),
-      view_(view),
-      sender_(sender) {}
+Server::Server(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Server::~Server() {
-  if (context_ != nullptr) mg_stop(context_);
-  mg_exit_library();
+  impl_->io.stop();
+  impl_->thread.join();
 }
 
 void Server::tick(std::uint64_t stamp_ms) {
-  const auto statuses = sender_.take_statuses();
-  // With no page open (most of a bench's day) there is nobody to build a frame for; a page
-  // that opens starts from a snapshot of its own.
-  if (std::lock_guard lock(mutex_); pages_.empty()) return;
-  const Targets targets = sender_.targets();
-  const DashboardFrame frame = dashboard_frame(view_.snapshot(), targets);
-  std::lock_guard lock(mutex_);
-  for (auto& [connection, page] : pages_) {
-    for (const CommandStatus& status : statuses) page->batcher.add_status(status);
-    if (const auto update = page->batcher.tick(frame, stamp_ms)) post(*page, *update);
-  }
-}
-
-// Before any route: a name teejet-web does not serve under is a rebound one (see request_guard).
-int Server::admit(mg_connection* connection) {
-  const auto& server = *static_cast<const Server*>(mg_get_user_data(mg_get_context(connection)));
-  const char* host = mg_get_header(connection, "Host");
-  if (host != nullptr && host_allowed(host, server.hosts_)) return 0;
-  const std::string answer = forbidden_host_answer();
-  mg_write(connection, answer.data(), answer.size());
-  return 403;
-}
-
-int Server::valves(mg_connection* connection, void* data) {
-  auto& server = *static_cast<Server*>(data);
-  const mg_request_info* request = mg_get_request_info(connection);
-  if (std::strcmp(request->request_method, "GET") != 0) {
-    mg_send_http_error(connection, 405, "GET only");
-    return 405;
-  }
-  const std::string body = valves_json(server.view_.snapshot(), server.sender_.targets()).dump();
-  mg_send_http_ok(connection, "application/json", static_cast<long long>(body.size()));
-  mg_write(connection, body.data(), body.size());
-  return 200;
-}
-
-// A page of another site must not reach the bench through the operator's browser; a page over
-// kMaxPages would take the last worker threads (the page retries with its backoff).
-int Server::connect(const mg_connection* connection, void* data) {
-  auto& server = *static_cast<Server*>(data);
-  {
-    std::lock_guard lock(server.mutex_);
-    if (server.pages_.size() >= kMaxPages) return 1;
-  }
-  const char* origin = mg_get_header(connection, "Origin");
-  if (origin == nullptr) return 0;  // not a browser
-  return origin_allowed(origin, server.hosts_) ? 0 : 1;
-}
-
-void Server::ready(mg_connection* connection, void* data) {
-  auto& server = *static_cast<Server*>(data);
-  const DashboardFrame frame = dashboard_frame(server.view_.snapshot(), server.sender_.targets());
-  std::lock_guard lock(server.mutex_);
-  auto& page = server.pages_[connection];
-  page = std::make_unique<Page>(connection);
-  nlohmann::json snapshot = page->batcher.snapshot(frame);
-  snapshot["commands"] = command_policy_json(server.policy_);
-  snapshot["protocol"] = page_protocol_json();
-  post(*page, snapshot);
-}
-
-int Server::message(mg_connection* connection, int flags, char* text, std::size_t length,
-                    void* data) {
-  auto& server = *static_cast<Server*>(data);
-  const int opcode = flags & 0x0f;
-  if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
-  if (opcode != MG_WEBSOCKET_OPCODE_TEXT) return 1;
-  const auto check_token = [&](std::string_view token) -> std::optional<std::string> {
-    const auto answer = server.tokens_.check(reinterpret_cast<std::uintptr_t>(connection), token);
-    if (!answer.log.empty()) {
-      const mg_request_info* peer = mg_get_request_info(connection);
-      std::cerr << "teejet-web: " << answer.log << " (from " << peer->remote_addr << " port "
-                << peer->remote_port << ")\n";
-    }
-    if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
-    return TokenGuard::reason(answer);
-  };
-  const nlohmann::json answer = handle_page_message({text, length}, server.view_.snapshot(),
-                                                    server.policy_, server.sender_, check_token);
-  std::lock_guard lock(server.mutex_);
-  if (const auto page = server.pages_.find(connection); page != server.pages_.end()) {
-    post(*page->second, answer);
-  }
-  return 1;
-}
-
-void Server::close(const mg_connection* connection, void* data) {
-  auto& server = *static_cast<Server*>(data);
-  std::unique_ptr<Page> page;
-  {
-    std::lock_guard lock(server.mutex_);
-    const auto found = server.pages_.find(const_cast<mg_connection*>(connection));
-    if (found == server.pages_.end()) return;
-    page = std::move(found->second);
-    server.pages_.erase(found);
-  }
-  server.tokens_.forget(reinterpret_cast<std::uintptr_t>(connection));
-  // Joined here, out of the lock: the ticks of the other pages go on meanwhile.
-  page.reset();
-}
-
-void Server::post(Page& page, const nlohmann::json& message) {
-  if (page.outbox.post(message)) {
-    std::cerr << "teejet-web: a page stopped reading (" << kMaxQueuedMessages
-              << " messages waiting): dropped\n";
-  }
+  asio::post(impl_->io, [impl = impl_.get(), statuses = impl_->sender.take_statuses(), stamp_ms] {
+    impl->feed_pages(statuses, stamp_ms);
+  });
 }
 
 }  // namespace teejet::web
