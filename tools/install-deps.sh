@@ -61,6 +61,8 @@ PACKAGES=(
   chromium
   chromium-driver
   python3-selenium
+  # its https test trusts the test's own CA through an NSS database (certutil)
+  libnss3-tools
   # tools/demo carries the dashboard out of its network namespace through a Unix socket
   socat
   # docs/recording.md's plot of a recording (tools/plot-recording.py)

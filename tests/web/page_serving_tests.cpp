@@ -19,23 +19,29 @@ const AllowedHosts kLoopback = allowed_hosts("127.0.0.1:8080", {}, {});
 constexpr std::string_view kOwnPage = "http://127.0.0.1:8080";
 
 TEST(WebPageAdmission, APageOfThisServerIsAdmittedUpToTheLimit) {
-  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, 0), std::nullopt);
-  EXPECT_EQ(refuse_page("http://localhost:8080", kLoopback, 0), std::nullopt);
-  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, kMaxPages - 1), std::nullopt);
-  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, kMaxPages),
+  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, Scheme::kHttp, 0), std::nullopt);
+  EXPECT_EQ(refuse_page("http://localhost:8080", kLoopback, Scheme::kHttp, 0), std::nullopt);
+  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, Scheme::kHttp, kMaxPages - 1), std::nullopt);
+  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, Scheme::kHttp, kMaxPages),
             (PageRefusal{503, "already 48 pages open"}));
 }
 
 TEST(WebPageAdmission, AClientWithoutOriginIsNotABrowserAndIsAdmitted) {
-  EXPECT_EQ(refuse_page(std::nullopt, kLoopback, 0), std::nullopt);
+  EXPECT_EQ(refuse_page(std::nullopt, kLoopback, Scheme::kHttp, 0), std::nullopt);
 }
 
 TEST(WebPageAdmission, APageOfAnotherOriginIsRefused) {
   const PageRefusal refused{403, "a page of another origin may not open the dashboard's WebSocket"};
-  EXPECT_EQ(refuse_page("http://example.com", kLoopback, 0), refused);
-  EXPECT_EQ(refuse_page("https://127.0.0.1:8080", kLoopback, 0), refused);
-  EXPECT_EQ(refuse_page("http://127.0.0.1:8081", kLoopback, 0), refused);
-  EXPECT_EQ(refuse_page("", kLoopback, 0), refused);
+  EXPECT_EQ(refuse_page("http://example.com", kLoopback, Scheme::kHttp, 0), refused);
+  EXPECT_EQ(refuse_page("https://127.0.0.1:8080", kLoopback, Scheme::kHttp, 0), refused);
+  EXPECT_EQ(refuse_page("http://127.0.0.1:8081", kLoopback, Scheme::kHttp, 0), refused);
+  EXPECT_EQ(refuse_page("", kLoopback, Scheme::kHttp, 0), refused);
+}
+
+TEST(WebPageAdmission, OnATlsServerOnlyAnHttpsPageOfThisServerIsAdmitted) {
+  EXPECT_EQ(refuse_page("https://127.0.0.1:8080", kLoopback, Scheme::kHttps, 0), std::nullopt);
+  EXPECT_EQ(refuse_page(kOwnPage, kLoopback, Scheme::kHttps, 0),
+            (PageRefusal{403, "a page of another origin may not open the dashboard's WebSocket"}));
 }
 
 class WebPageFiles : public ::testing::Test {

@@ -61,16 +61,25 @@ TEST(WebRequestGuard, EveryInterfaceMeansEveryLocalAddressAndLocalhost) {
 
 TEST(WebRequestGuard, AnOriginMustBeAPageOfAnAllowedHost) {
   const AllowedHosts allowed = allowed_hosts("127.0.0.1:18090", {}, {"bench"});
-  EXPECT_TRUE(origin_allowed("http://127.0.0.1:18090", allowed));
-  EXPECT_TRUE(origin_allowed("http://localhost:18090", allowed));
-  EXPECT_TRUE(origin_allowed("http://bench:18090", allowed));
+  EXPECT_TRUE(origin_allowed("http://127.0.0.1:18090", allowed, Scheme::kHttp));
+  EXPECT_TRUE(origin_allowed("http://localhost:18090", allowed, Scheme::kHttp));
+  EXPECT_TRUE(origin_allowed("http://bench:18090", allowed, Scheme::kHttp));
   // DNS rebinding: the attacker's name, with its own Origin, on our port.
-  EXPECT_FALSE(origin_allowed("http://attacker.example:18090", allowed));
-  EXPECT_FALSE(origin_allowed("https://127.0.0.1:18090", allowed));
-  EXPECT_FALSE(origin_allowed("http://127.0.0.1:18091", allowed));
-  EXPECT_FALSE(origin_allowed("http://127.0.0.1:18090/", allowed));
-  EXPECT_FALSE(origin_allowed("null", allowed));
-  EXPECT_FALSE(origin_allowed("", allowed));
+  EXPECT_FALSE(origin_allowed("http://attacker.example:18090", allowed, Scheme::kHttp));
+  EXPECT_FALSE(origin_allowed("https://127.0.0.1:18090", allowed, Scheme::kHttp));
+  EXPECT_FALSE(origin_allowed("http://127.0.0.1:18091", allowed, Scheme::kHttp));
+  EXPECT_FALSE(origin_allowed("http://127.0.0.1:18090/", allowed, Scheme::kHttp));
+  EXPECT_FALSE(origin_allowed("null", allowed, Scheme::kHttp));
+  EXPECT_FALSE(origin_allowed("", allowed, Scheme::kHttp));
+}
+
+TEST(WebRequestGuard, ATlsServersOriginIsHttpsAndAnAllowedHost) {
+  const AllowedHosts allowed = allowed_hosts("127.0.0.1:18090", {}, {"bench"});
+  EXPECT_TRUE(origin_allowed("https://127.0.0.1:18090", allowed, Scheme::kHttps));
+  EXPECT_TRUE(origin_allowed("https://bench:18090", allowed, Scheme::kHttps));
+  // The same page over plain http is another origin: a downgraded or foreign page.
+  EXPECT_FALSE(origin_allowed("http://127.0.0.1:18090", allowed, Scheme::kHttps));
+  EXPECT_FALSE(origin_allowed("https://attacker.example:18090", allowed, Scheme::kHttps));
 }
 
 TEST(WebRequestGuard, AllowedHostNamesAreNamesWithoutPort) {

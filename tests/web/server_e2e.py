@@ -32,6 +32,12 @@ client (web_client.py, standard library only) stands in for the page.
   starvation  60 slowloris requests and 48 idle pages: /api/valves and / still answer, the 49th
             page is refused, the idle pages and the slowloris connections are closed in time.
   handshakes  70 handshakes at once: exactly 48 pages with their snapshot.
+  tls       with its own CA and certificate (tools/pki web) and a token: trusting that CA only,
+            GET /api/valves over https lists the 4 valves and a wss page's move reaches
+            completed; plain http to the port gets 400 and no valve data; a client trusting
+            only the system store, or connecting as a name not in the certificate, fails
+            verification. A missing file, a key not the certificate's or open to others, one
+            option without the other: exit 2 with the reason.
   hardening path traversal 404, long URL or header 431, other methods 405, a body 400; 1,000
             connect/close cycles and 100 pages leave the open descriptors as they were.
 
@@ -39,9 +45,12 @@ Every wait has a deadline; every failure says what differed.
 """
 
 import argparse
+import http.client
 import json
 import os
+import shutil
 import socket
+import ssl
 import subprocess
 import sys
 import tempfile
@@ -55,6 +64,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from waiting import Timeout, eventually  # noqa: E402 (tests/support)
 
 PORT = 18080
+PKI = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools", "pki")
+TLS_PKI = None  # the tls case's own web CA and certificates (tools/pki web)
 TICK_S = 0.040
 MAX_PAGES = 48  # kMaxPages of server.cpp
 SWITCHING = "HTTP/1.1 101 Switching Protocols"
@@ -283,10 +294,12 @@ def pages():
     print(f"{MAX_PAGES} pages served, the next refused ({extra.status!r}), a free place reused")
 
 
-def move_completes(page, serial, degrees, seconds):
-    answer = page.answer(json.dumps({"id": 1, "command": "move", "serial": serial,
-                                     "degrees": degrees, "speed_percent": 100,
-                                     "direction": "shortest"}))
+def move_completes(page, serial, degrees, seconds, token=None):
+    move = {"id": 1, "command": "move", "serial": serial, "degrees": degrees,
+            "speed_percent": 100, "direction": "shortest"}
+    if token:
+        move["token"] = token
+    answer = page.answer(json.dumps(move))
     check(answer["type"] == "sent" and "command_id" in answer["commands"][0], f"move: {answer}")
     command_id = answer["commands"][0]["command_id"]
     states = []
@@ -565,6 +578,83 @@ def hardening():
           f"descriptors ({fds} before), VmRSS {vm_rss_kb()} kB ({rss} kB before)")
 
 
+def https_get(path, context):
+    """(status, body) of a GET over TLS verified by `context`; (None, "") while nothing listens."""
+    try:
+        raw = socket.create_connection(("127.0.0.1", PORT), timeout=10)
+    except ConnectionRefusedError:
+        return None, ""
+    with context.wrap_socket(raw, server_hostname="127.0.0.1") as sock:
+        sock.sendall(f"GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{PORT}\r\n"
+                     "Connection: close\r\n\r\n".encode())
+        response = http.client.HTTPResponse(sock)
+        response.begin()
+        return response.status, response.read().decode()
+
+
+def verification_error(context, server_hostname):
+    """The reason a TLS handshake as `server_hostname` fails verification; None when it passes."""
+    try:
+        with socket.create_connection(("127.0.0.1", PORT), timeout=10) as raw:
+            with context.wrap_socket(raw, server_hostname=server_hostname):
+                return None
+    except ssl.SSLCertVerificationError as error:
+        return error.verify_message
+
+
+def bad_tls_options(web, pki, work):
+    """Each bad --tls-* exits 2 with its reason, before it joins DDS."""
+    cert, key = f"{pki}/web/teejet-web/cert.pem", f"{pki}/web/teejet-web/key.pem"
+    open_key = os.path.join(work, "open-key.pem")
+    shutil.copy(key, open_key)
+    os.chmod(open_key, 0o644)
+    cases = [
+        ([f"--tls-cert={cert}"], "give --tls-cert and --tls-key together"),
+        ([f"--tls-cert={work}/missing.pem", f"--tls-key={key}"],
+         f"--tls-cert {work}/missing.pem: cannot read it"),
+        ([f"--tls-cert={cert}", f"--tls-key={pki}/web/other/key.pem"],
+         f"--tls-key {pki}/web/other/key.pem: not the key of --tls-cert {cert}"),
+        ([f"--tls-cert={cert}", f"--tls-key={open_key}"],
+         f"--tls-key {open_key}: group or others may access it (mode 0644): chmod 600 "
+         f"{open_key}"),
+    ]
+    for options, reason in cases:
+        run = subprocess.run([web, "--listen", f"127.0.0.1:{PORT + 1}"] + options,
+                             capture_output=True, text=True, timeout=30)
+        check(run.returncode == 2 and run.stderr == f"teejet-web: {reason}\n",
+              f"{options}: exit {run.returncode}, {run.stderr!r}, not 2 and {reason!r}")
+
+
+def tls():
+    bad_tls_options(WEB.args[0], TLS_PKI, os.path.dirname(WEB_LOG))
+    # The test's own CA and nothing else.
+    trusting = ssl.create_default_context(cafile=os.path.join(TLS_PKI, "web-ca.pem"))
+    valves = eventually(lambda: https_get("/api/valves", trusting), 15,
+                        "4 valves on https://127.0.0.1/api/valves",
+                        ok=lambda got: got[0] == 200 and len(json.loads(got[1])) >= 4)
+    check([v["serial"] for v in json.loads(valves[1])] ==
+          ["TJV000001", "TJV000002", "TJV000003", "TJV000004"], f"serials: {valves[1][:200]}")
+    raw = socket.create_connection(("127.0.0.1", PORT), timeout=10)
+    sock = trusting.wrap_socket(raw, server_hostname="127.0.0.1")
+    sock.sendall(web_client.upgrade_request(PORT, origin=f"https://127.0.0.1:{PORT}"))
+    page = web_client.WebSocket.after_request(sock)
+    check(page.status == SWITCHING, f"wss handshake: {page.status}")
+    snapshot = page.receive()
+    check(snapshot["type"] == "snapshot" and len(snapshot["valves"]) == 4, f"first: {snapshot}")
+    move_completes(page, "TJV000002", 90, 30, token=TOKEN)
+    status_line, _, body = web_client.raw_http(PORT, "/api/valves", f"127.0.0.1:{PORT}")
+    check(status_line == "HTTP/1.1 400 Bad Request" and "speaks https" in body
+          and "TJV" not in body, f"plain http on the TLS port: {status_line} {body!r}")
+    system_only = ssl.create_default_context()
+    reason = verification_error(system_only, "127.0.0.1")
+    check(reason is not None, "a client trusting only the system store accepted the certificate")
+    wrong_name = verification_error(trusting, "bench.example")
+    check(wrong_name is not None and "mismatch" in wrong_name,
+          f"connecting as bench.example (not in the certificate): {wrong_name}")
+    print(f"https: 4 valves, a wss move reached completed; plain http: {status_line}; system "
+          f"store only: {reason}; as bench.example: {wrong_name}")
+
+
 def main():
     global WEB, WEB_LOG, WEB_BY_VARIABLE
     parser = argparse.ArgumentParser()
@@ -581,6 +671,16 @@ def main():
     if args.case == "guards":
         web_args += ["--allowed-host", "Bench-PC"]
     WEB_BY_VARIABLE = None
+    environment = dict(os.environ, TEEJET_WEB_PAGE_IDLE_S=str(PAGE_IDLE_S))
+    if args.case == "tls":
+        global TLS_PKI
+        pki = TLS_PKI = os.path.join(work, "pki")
+        for name, where in (("teejet-web", ["--ip", "127.0.0.1", "--dns", "localhost"]),
+                            ("other", ["--dns", "other.example"])):
+            subprocess.run([PKI, "web", pki, name] + where, check=True, capture_output=True)
+        web_args += ["--allow-commands", "--tls-cert", f"{pki}/web/teejet-web/cert.pem",
+                     "--tls-key", f"{pki}/web/teejet-web/key.pem"]
+        environment["TEEJET_WEB_TOKEN"] = TOKEN
     if args.case == "token":
         token_file = os.path.join(work, "token")
         with open(os.open(token_file, os.O_WRONLY | os.O_CREAT, 0o600), "w") as out:
@@ -590,7 +690,6 @@ def main():
             [args.web, "--listen", f"127.0.0.1:{PORT + 1}", "--allow-commands"],
             env=dict(os.environ, TEEJET_WEB_TOKEN=TOKEN),
             stdout=open(os.path.join(work, "web-variable.log"), "w"), stderr=subprocess.STDOUT)
-    environment = dict(os.environ, TEEJET_WEB_PAGE_IDLE_S=str(PAGE_IDLE_S))
     gateway = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
                                stderr=subprocess.STDOUT)
     WEB = subprocess.Popen(web_args, stdout=open(web_log_path, "w"), stderr=subprocess.STDOUT,
@@ -618,7 +717,7 @@ def main():
 CASES = {"readonly": readonly, "commands": commands, "guards": guards, "token": token,
          "pages": pages, "slowpage": slowpage,
          "frames": frames, "oversize": oversize, "starvation": starvation,
-         "handshakes": handshakes, "hardening": hardening}
+         "handshakes": handshakes, "hardening": hardening, "tls": tls}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -47,6 +47,9 @@ struct Options {
   std::string token_file;
   std::string www;
   std::vector<std::string> allowed_hosts;  // after parse(): lower case, checked
+  std::string tls_cert;
+  std::string tls_key;
+  std::shared_ptr<web::TlsIdentity> tls;  // after parse(): loaded from both, or none
 };
 
 // One of --token-file, TEEJET_WEB_TOKEN and --token; nothing when none is given.
@@ -108,6 +111,11 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
                  "or set TEEJET_WEB_TOKEN");
   app.add_option("--token", options.token,
                  "the same on the command line, which local users can read: for a bench only");
+  app.add_option("--tls-cert", options.tls_cert,
+                 "serve https and wss only, with the certificate (chain) in FILE (PEM); needs "
+                 "--tls-key");
+  app.add_option("--tls-key", options.tls_key,
+                 "the certificate's private key in FILE (PEM, unencrypted, mode 600)");
   app.add_option("--www", options.www,
                  "directory of the page (default: www next to the executable, then "
                  "../share/teejet-web/www)");
@@ -128,6 +136,18 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
       return kExitUsage;
     }
     name = *allowed;
+  }
+  if (options.tls_cert.empty() != options.tls_key.empty()) {
+    std::cerr << "teejet-web: give --tls-cert and --tls-key together\n";
+    return kExitUsage;
+  }
+  if (!options.tls_cert.empty()) {
+    auto tls = web::load_tls_identity(options.tls_cert, options.tls_key);
+    if (!tls) {
+      std::cerr << "teejet-web: " << tls.error().reason << '\n';
+      return kExitUsage;
+    }
+    options.tls = std::move(*tls);
   }
   return take_token(options);
 }
@@ -154,7 +174,12 @@ Result<Dds> join_dds(const Options& options) {
 }
 
 void announce(const Options& options, const std::filesystem::path& www) {
-  std::cerr << "teejet-web: http://" << options.listen << "/ (domain " << options.domain << ", "
+  if (!options.token.empty() && !options.tls && !web::loopback_listen(options.listen)) {
+    std::cerr << "teejet-web: warning: the token travels in clear over plain http on "
+              << options.listen << ": anyone on that network can read it (--tls-cert, --tls-key)\n";
+  }
+  std::cerr << "teejet-web: " << (options.tls ? "https://" : "http://") << options.listen
+            << "/ (domain " << options.domain << ", "
             << (options.allow_commands ? "commands allowed" : "read-only") << ", page from "
             << www.string() << ")\n";
 }
@@ -196,7 +221,8 @@ int main(int argc, char** argv) {
       {.listen = options.listen,
        .www = *www,
        .policy = {options.allow_commands, options.token},
-       .hosts = web::allowed_hosts(options.listen, web::local_addresses(), options.allowed_hosts)},
+       .hosts = web::allowed_hosts(options.listen, web::local_addresses(), options.allowed_hosts),
+       .tls = options.tls},
       *dds->view, sender);
   if (!server) return fail(server.error());
   announce(options, *www);

@@ -3,8 +3,9 @@
 namespace teejet::web {
 
 std::optional<PageRefusal> refuse_page(std::optional<std::string_view> origin,
-                                       const AllowedHosts& hosts, std::size_t open_pages) {
-  if (origin && !origin_allowed(*origin, hosts)) {
+                                       const AllowedHosts& hosts, Scheme scheme,
+                                       std::size_t open_pages) {
+  if (origin && !origin_allowed(*origin, hosts, scheme)) {
     return PageRefusal{403, "a page of another origin may not open the dashboard's WebSocket"};
   }
   if (open_pages >= kMaxPages) {

@@ -29,6 +29,7 @@ struct PageRefusal {
 // server (origin_allowed). A client without Origin is not a browser, and no other site's script
 // can make one.
 std::optional<PageRefusal> refuse_page(std::optional<std::string_view> origin,
-                                       const AllowedHosts& hosts, std::size_t open_pages);
+                                       const AllowedHosts& hosts, Scheme scheme,
+                                       std::size_t open_pages);
 
 }  // namespace teejet::web

@@ -78,6 +78,13 @@ bool is_loopback(const std::string& address) {
   return address == "::1" || address.rfind("127.", 0) == 0;
 }
 
+// A whole answer with the security headers, after which the connection is closed.
+std::string closing_answer(std::string_view status, std::string_view reason) {
+  return std::string("HTTP/1.1 ") + std::string(status) + "\r\n" + kSecurityHeaders +
+         "\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: " +
+         std::to_string(reason.size()) + "\r\nConnection: close\r\n\r\n" + std::string(reason);
+}
+
 }  // namespace
 
 AllowedHosts allowed_hosts(std::string_view listen, const std::vector<std::string>& local_addresses,
@@ -102,6 +109,11 @@ AllowedHosts allowed_hosts(std::string_view listen, const std::vector<std::strin
   return allowed;
 }
 
+bool loopback_listen(std::string_view listen) {
+  const auto split = split_host(listen);
+  return split && is_loopback(split->host);
+}
+
 bool host_allowed(std::string_view host, const AllowedHosts& allowed) {
   const auto split = split_host(host);
   if (!split || split->port != allowed.port) return false;
@@ -109,18 +121,21 @@ bool host_allowed(std::string_view host, const AllowedHosts& allowed) {
 }
 
 std::string forbidden_host_answer() {
-  const std::string reason =
-      "teejet-web does not serve this Host name: open it by the address it listens on, or start "
-      "it with --allowed-host NAME\n";
-  return std::string("HTTP/1.1 403 Forbidden\r\n") + kSecurityHeaders +
-         "\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: " +
-         std::to_string(reason.size()) + "\r\nConnection: close\r\n\r\n" + reason;
+  return closing_answer("403 Forbidden",
+                        "teejet-web does not serve this Host name: open it by the address it "
+                        "listens on, or start it with --allowed-host NAME\n");
 }
 
-bool origin_allowed(std::string_view origin, const AllowedHosts& allowed) {
-  constexpr std::string_view kScheme = "http://";
-  if (origin.substr(0, kScheme.size()) != kScheme) return false;
-  return host_allowed(origin.substr(kScheme.size()), allowed);
+std::string plain_http_answer() {
+  return closing_answer("400 Bad Request",
+                        "this port speaks https only: open the dashboard as https://, not "
+                        "http://\n");
+}
+
+bool origin_allowed(std::string_view origin, const AllowedHosts& allowed, Scheme scheme) {
+  const std::string_view prefix = scheme == Scheme::kHttps ? "https://" : "http://";
+  if (origin.substr(0, prefix.size()) != prefix) return false;
+  return host_allowed(origin.substr(prefix.size()), allowed);
 }
 
 Result<std::string> parse_allowed_host(std::string_view name) {

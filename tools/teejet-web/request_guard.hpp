@@ -39,6 +39,10 @@ struct AllowedHosts {
 AllowedHosts allowed_hosts(std::string_view listen, const std::vector<std::string>& local_addresses,
                            const std::vector<std::string>& names);
 
+// Whether a server listening on `listen` (as parse_listen() made it) is reached from this machine
+// only: a loopback address, where nothing it sends crosses a network.
+bool loopback_listen(std::string_view listen);
+
 // Whether a Host header ("127.0.0.1:8080", "[::1]:8080", "bench:8080", "bench" for port 80)
 // names an allowed host on the served port.
 bool host_allowed(std::string_view host, const AllowedHosts& allowed);
@@ -48,8 +52,16 @@ bool host_allowed(std::string_view host, const AllowedHosts& allowed);
 // its own error answer to a WebSocket handshake.
 std::string forbidden_host_answer();
 
-// Whether a WebSocket's Origin is a page of this server: "http://" and an allowed host.
-bool origin_allowed(std::string_view origin, const AllowedHosts& allowed);
+// The whole answer to a plain http request on a TLS server's port: 400 saying the port speaks
+// https, the security headers, and the connection closed; never the page or data.
+std::string plain_http_answer();
+
+// How the server is reached: its pages' Origin has this scheme.
+enum class Scheme { kHttp, kHttps };
+
+// Whether a WebSocket's Origin is a page of this server: "http://" ("https://" for a TLS server)
+// and an allowed host.
+bool origin_allowed(std::string_view origin, const AllowedHosts& allowed, Scheme scheme);
 
 // --allowed-host NAME: a DNS name as people type it (letters, digits, '-' and '.'), no port.
 Result<std::string> parse_allowed_host(std::string_view name);

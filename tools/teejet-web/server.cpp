@@ -3,24 +3,31 @@
 
 #include "server.hpp"
 
+#include <openssl/err.h>
+#include <openssl/ssl.h>
+
 #include <algorithm>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/write.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
 #include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <set>
 #include <string>
 #include <string_view>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -29,6 +36,7 @@
 #include "page_files.hpp"
 #include "page_outbox.hpp"
 #include "request_guard.hpp"
+#include "token_file.hpp"
 #include "token_guard.hpp"
 
 namespace teejet::web {
@@ -39,6 +47,7 @@ namespace beast = boost::beast;
 namespace http = beast::http;
 namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
 using namespace std::chrono_literals;
 
 // Open connections of every kind (requests, keep-alive, pages). At the cap a new connection is
@@ -47,7 +56,8 @@ constexpr std::size_t kMaxConnections = 256;
 // A request line and headers beyond this are answered 431 and closed; no request has a body.
 constexpr std::uint32_t kMaxHeaderBytes = 8 * 1024;
 // From accept, or from the previous response of a keep-alive connection, to a whole request's
-// headers: both the idle keep-alive timeout and the end of a request dribbled byte by byte.
+// headers: both the idle keep-alive timeout and the end of a request dribbled byte by byte. On a
+// TLS server the same bounds the handshake.
 constexpr auto kRequestDeadline = 10s;
 // A WebSocket's opening and closing handshakes.
 constexpr auto kHandshakeTimeout = 10s;
@@ -90,6 +100,45 @@ std::optional<std::string_view> header(const Request& request, http::field field
 
 }  // namespace
 
+struct TlsIdentity {
+  asio::ssl::context context{asio::ssl::context::tls_server};
+};
+
+Result<std::shared_ptr<TlsIdentity>> load_tls_identity(const std::filesystem::path& cert,
+                                                       const std::filesystem::path& key) {
+  const auto fail = [](std::string_view option, const std::filesystem::path& file,
+                       const std::string& why) {
+    return Error{ErrorCode::kInvalidValue, std::string(option) + " " + file.string() + ": " + why};
+  };
+  if (!std::ifstream(cert)) return fail("--tls-cert", cert, "cannot read it");
+  if (const auto problem = owner_only_problem(key)) return fail("--tls-key", key, *problem);
+  if (!std::ifstream(key)) return fail("--tls-key", key, "cannot read it");
+  auto identity = std::make_shared<TlsIdentity>();
+  asio::ssl::context& context = identity->context;
+  // TLS 1.2 at least, the server's order of ciphers rather than the client's; no client
+  // certificates are asked for (a server context verifies none by default).
+  context.set_options(asio::ssl::context::default_workarounds | asio::ssl::context::no_sslv2 |
+                      asio::ssl::context::no_sslv3 | asio::ssl::context::no_tlsv1 |
+                      asio::ssl::context::no_tlsv1_1 | asio::ssl::context::single_dh_use);
+  SSL_CTX_set_min_proto_version(context.native_handle(), TLS1_2_VERSION);
+  SSL_CTX_set_options(context.native_handle(), SSL_OP_CIPHER_SERVER_PREFERENCE);
+  // An encrypted key would otherwise ask for its passphrase on the terminal: refuse it instead.
+  context.set_password_callback(
+      [](std::size_t, asio::ssl::context::password_purpose) { return std::string(); });
+  beast::error_code error;
+  context.use_certificate_chain_file(cert.string(), error);
+  if (error) return fail("--tls-cert", cert, "not a PEM certificate (" + error.message() + ")");
+  context.use_private_key_file(key.string(), asio::ssl::context::pem, error);
+  const bool mismatch = error ? ERR_GET_REASON(static_cast<unsigned long>(error.value())) ==
+                                    X509_R_KEY_VALUES_MISMATCH
+                              : SSL_CTX_check_private_key(context.native_handle()) != 1;
+  if (mismatch) return fail("--tls-key", key, "not the key of --tls-cert " + cert.string());
+  if (error) {
+    return fail("--tls-key", key, "not an unencrypted PEM private key (" + error.message() + ")");
+  }
+  return identity;
+}
+
 // One open page as the tick sees it, whatever stream it is on. Not in the anonymous namespace:
 // Server::Impl holds pointers to it.
 class ServedPage {
@@ -107,7 +156,8 @@ struct Server::Impl {
         tokens(options.policy.token, [] { return std::chrono::steady_clock::now(); }),
         view(valve_view),
         sender(dds_sender),
-        files(std::move(page_files)) {}
+        files(std::move(page_files)),
+        tls(options.tls) {}
 
   void accept();
   void feed_pages(const std::vector<CommandStatus>& statuses, std::uint64_t stamp_ms);
@@ -120,6 +170,8 @@ struct Server::Impl {
   DdsSender& sender;
   const PageFiles files;
   const std::chrono::seconds page_idle = page_idle_timeout();
+  const std::shared_ptr<TlsIdentity> tls;  // none: plain http
+  const Scheme scheme = tls ? Scheme::kHttps : Scheme::kHttp;
   // Touched on the I/O thread only. Declared before the io_context: the sessions that its
   // handlers still own when it goes count themselves out of these.
   std::size_t connections = 0;
@@ -276,8 +328,28 @@ class PageSession final : public ServedPage,
 template <class Stream>
 class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream>> {
  public:
-  HttpSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot)
-      : server_(server), stream_(std::move(stream)), slot_(std::move(slot)) {}
+  // `received`: what was read of the connection already (the start of a TLS handshake).
+  HttpSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot,
+              beast::flat_buffer received = {})
+      : server_(server),
+        stream_(std::move(stream)),
+        slot_(std::move(slot)),
+        buffer_(std::move(received)) {}
+
+  void start() {
+    if constexpr (std::is_same_v<Stream, TlsStream>) {
+      beast::get_lowest_layer(stream_).expires_after(kRequestDeadline);
+      stream_.async_handshake(
+          asio::ssl::stream_base::server, buffer_.data(),
+          [self = this->shared_from_this()](beast::error_code error, std::size_t used) {
+            if (error) return self->close();
+            self->buffer_.consume(used);
+            self->read_request();
+          });
+    } else {
+      read_request();
+    }
+  }
 
   void read_request() {
     parser_.emplace();
@@ -314,8 +386,8 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream
 
   // The one place a page is admitted.
   void upgrade(Request request) {
-    const auto refusal =
-        refuse_page(header(request, http::field::origin), server_.hosts, server_.admitted_pages);
+    const auto refusal = refuse_page(header(request, http::field::origin), server_.hosts,
+                                     server_.scheme, server_.admitted_pages);
     if (refusal) {
       Response response{static_cast<http::status>(refusal->status), request.version()};
       response.set(http::field::content_type, "text/plain; charset=utf-8");
@@ -370,6 +442,58 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream
   Response response_;
   std::string raw_;
   bool head_ = false;
+};
+
+// A connection to a TLS server before its first byte is known: a TLS handshake goes on as an
+// HttpSession over TLS, anything else (a plain http request) is answered 400 and closed.
+class TlsDetector final : public std::enable_shared_from_this<TlsDetector> {
+ public:
+  TlsDetector(Server::Impl& server, beast::tcp_stream&& stream, ConnectionSlot slot)
+      : server_(server), stream_(std::move(stream)), slot_(std::move(slot)) {}
+
+  void run() {
+    stream_.expires_after(kRequestDeadline);
+    beast::async_detect_ssl(stream_, buffer_,
+                            [self = shared_from_this()](beast::error_code error, bool tls) {
+                              self->on_detect(error, tls);
+                            });
+  }
+
+ private:
+  void on_detect(beast::error_code error, bool tls) {
+    if (error) return stream_.close();
+    if (tls) {
+      std::make_shared<HttpSession<TlsStream>>(server_,
+                                               TlsStream(std::move(stream_), server_.tls->context),
+                                               std::move(slot_), std::move(buffer_))
+          ->start();
+      return;
+    }
+    answer_ = plain_http_answer();
+    asio::async_write(stream_, asio::buffer(answer_),
+                      [self = shared_from_this()](beast::error_code, std::size_t) {
+                        beast::error_code ignored;
+                        self->stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+                        self->drain();
+                      });
+  }
+
+  // The rest of the request is read and dropped until the client closes (or the deadline):
+  // closing with it unread would reset the connection, and the answer with it.
+  void drain() {
+    buffer_.clear();
+    stream_.async_read_some(buffer_.prepare(4096),
+                            [self = shared_from_this()](beast::error_code error, std::size_t) {
+                              if (error) return self->stream_.close();
+                              self->drain();
+                            });
+  }
+
+  Server::Impl& server_;
+  beast::tcp_stream stream_;
+  ConnectionSlot slot_;
+  beast::flat_buffer buffer_;
+  std::string answer_;
 };
 
 Result<tcp::endpoint> endpoint(const std::string& listen) {
@@ -429,9 +553,15 @@ void Server::Impl::accept() {
     } else {
       said_full = false;
       socket.set_option(tcp::no_delay(true), error);
-      auto session = std::make_shared<HttpSession<beast::tcp_stream>>(
-          *this, beast::tcp_stream(std::move(socket)), ConnectionSlot(*this));
-      session->read_request();
+      if (tls) {
+        std::make_shared<TlsDetector>(*this, beast::tcp_stream(std::move(socket)),
+                                      ConnectionSlot(*this))
+            ->run();
+      } else {
+        std::make_shared<HttpSession<beast::tcp_stream>>(
+            *this, beast::tcp_stream(std::move(socket)), ConnectionSlot(*this))
+            ->start();
+      }
     }
     accept();
   });

@@ -20,11 +20,22 @@
 
 namespace teejet::web {
 
+// A TLS server's certificate chain and key, loaded and checked (Asio's SSL, in server.cpp).
+struct TlsIdentity;
+
+// --tls-cert and --tls-key (PEM): an Error naming the option and the file when a file cannot be
+// read, is not PEM, the key's file is open to group or others, or the key is not the
+// certificate's.
+Result<std::shared_ptr<TlsIdentity>> load_tls_identity(const std::filesystem::path& cert,
+                                                       const std::filesystem::path& key);
+
 struct ServerOptions {
   std::string listen;         // "ADDRESS:PORT", as parse_listen() made it
   std::filesystem::path www;  // the page's files, as find_www() found them
   CommandPolicy policy;
   AllowedHosts hosts;  // the Host names every request must give
+  // With it every route is served over https and wss only; without, over plain http.
+  std::shared_ptr<TlsIdentity> tls;
 };
 
 class Server {
