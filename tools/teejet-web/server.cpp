@@ -98,6 +98,149 @@ std::optional<std::string_view> header(const Request& request, http::field field
   return std::string_view(found->value().data(), found->value().size());
 }
 
+// Plain TCP, or TLS over it, behind one type. Beast's HTTP and WebSocket code is most of this
+// file's compile time and is compiled once per stream type it runs on: on this one type it is
+// compiled once, and only the reads and writes of bytes below know which stream carries them
+// (with a session per stream type, TLS had doubled the file's compile time to 2 minutes).
+class ByteStream {
+ public:
+  using executor_type = beast::tcp_stream::executor_type;
+
+  explicit ByteStream(beast::tcp_stream&& plain)
+      : plain_(std::make_unique<beast::tcp_stream>(std::move(plain))) {}
+  explicit ByteStream(TlsStream&& tls) : tls_(std::make_unique<TlsStream>(std::move(tls))) {}
+
+  executor_type get_executor() { return tcp().get_executor(); }
+  // The TCP stream under it: its deadlines, its socket.
+  beast::tcp_stream& tcp() { return plain_ ? *plain_ : beast::get_lowest_layer(*tls_); }
+
+  // What Asio's AsyncReadStream and AsyncWriteStream ask for. A read fills the first buffer
+  // that has room; a write sends what fits in kWriteChunk: both may do less than asked, as
+  // read_some and write_some may, and Beast's composed operations go on until all is done.
+  template <class Buffers, class Handler>
+  void async_read_some(const Buffers& buffers, Handler&& handler) {
+    asio::mutable_buffer first;
+    for (auto it = asio::buffer_sequence_begin(buffers); it != asio::buffer_sequence_end(buffers);
+         ++it) {
+      if (asio::mutable_buffer(*it).size() > 0) {
+        first = *it;
+        break;
+      }
+    }
+    read_some(first, Done(std::forward<Handler>(handler)));
+  }
+  template <class Buffers, class Handler>
+  void async_write_some(const Buffers& buffers, Handler&& handler) {
+    written_.resize(std::min(asio::buffer_size(buffers), kWriteChunk));
+    written_.resize(asio::buffer_copy(asio::buffer(written_), buffers));
+    write_some(Done(std::forward<Handler>(handler)));
+  }
+
+  // The WebSocket's closing: TLS's close_notify, then the socket's (Beast's teardown of each).
+  friend void teardown(beast::role_type role, ByteStream& stream, beast::error_code& error) {
+    stream.close_websocket(role, error);
+  }
+  template <class Handler>
+  friend void async_teardown(beast::role_type role, ByteStream& stream, Handler&& handler) {
+    stream.async_close_websocket(
+        role, Done([done = std::forward<Handler>(handler)](
+                       beast::error_code error, std::size_t) mutable { std::move(done)(error); }));
+  }
+  friend void beast_close_socket(ByteStream& stream) { stream.tcp().close(); }
+
+ private:
+  static constexpr std::size_t kWriteChunk = 16 * 1024;
+
+  // A completion handler of any type, called once: the one type the streams below see.
+  class Done {
+   public:
+    template <class Handler>
+    explicit Done(Handler&& handler)
+        : call_(std::make_unique<Call<std::decay_t<Handler>>>(std::forward<Handler>(handler))) {}
+    void operator()(beast::error_code error, std::size_t bytes) {
+      const auto call = std::move(call_);
+      (*call)(error, bytes);
+    }
+
+   private:
+    struct Base {
+      virtual ~Base() = default;
+      virtual void operator()(beast::error_code error, std::size_t bytes) = 0;
+    };
+    template <class Handler>
+    struct Call final : Base {
+      template <class H>
+      explicit Call(H&& h) : handler(std::forward<H>(h)) {}
+      void operator()(beast::error_code error, std::size_t bytes) override {
+        std::move(handler)(error, bytes);
+      }
+      Handler handler;
+    };
+    std::unique_ptr<Base> call_;
+  };
+
+  void read_some(asio::mutable_buffer buffer, Done done);
+  void write_some(Done done);
+  void close_websocket(beast::role_type role, beast::error_code& error);
+  void async_close_websocket(beast::role_type role, Done done);
+
+  std::unique_ptr<beast::tcp_stream> plain_;
+  std::unique_ptr<TlsStream> tls_;
+  std::vector<char> written_;  // what the write under way sends
+};
+
+void ByteStream::read_some(asio::mutable_buffer buffer, Done done) {
+  auto complete = [done = std::move(done)](beast::error_code error, std::size_t bytes) mutable {
+    done(error, bytes);
+  };
+  if (tls_) {
+    tls_->async_read_some(buffer, std::move(complete));
+  } else {
+    plain_->async_read_some(buffer, std::move(complete));
+  }
+}
+
+void ByteStream::write_some(Done done) {
+  auto complete = [done = std::move(done)](beast::error_code error, std::size_t bytes) mutable {
+    done(error, bytes);
+  };
+  if (tls_) {
+    tls_->async_write_some(asio::buffer(written_), std::move(complete));
+  } else {
+    plain_->async_write_some(asio::buffer(written_), std::move(complete));
+  }
+}
+
+// Beast's teardown of each stream is a hidden friend or an overload in websocket, found by
+// argument-dependent lookup only from outside ByteStream (whose own members hide the name).
+template <class Stream>
+void teardown_stream(beast::role_type role, Stream& stream, beast::error_code& error) {
+  using websocket::teardown;
+  teardown(role, stream, error);
+}
+template <class Stream, class Handler>
+void async_teardown_stream(beast::role_type role, Stream& stream, Handler&& handler) {
+  using websocket::async_teardown;
+  async_teardown(role, stream, std::forward<Handler>(handler));
+}
+
+void ByteStream::close_websocket(beast::role_type role, beast::error_code& error) {
+  if (tls_) {
+    teardown_stream(role, *tls_, error);
+  } else {
+    teardown_stream(role, plain_->socket(), error);
+  }
+}
+
+void ByteStream::async_close_websocket(beast::role_type role, Done done) {
+  auto complete = [done = std::move(done)](beast::error_code error) mutable { done(error, 0); };
+  if (tls_) {
+    async_teardown_stream(role, *tls_, std::move(complete));
+  } else {
+    async_teardown_stream(role, plain_->socket(), std::move(complete));
+  }
+}
+
 }  // namespace
 
 struct TlsIdentity {
@@ -203,17 +346,15 @@ class ConnectionSlot {
   Server::Impl* server_;
 };
 
-// A page's WebSocket on `Stream` (beast::tcp_stream; an ssl_stream over it for TLS). Admitted
-// already: it holds one of kMaxPages from its construction to its destruction.
-template <class Stream>
-class PageSession final : public ServedPage,
-                          public std::enable_shared_from_this<PageSession<Stream>> {
+// A page's WebSocket. Admitted already: it holds one of kMaxPages from its construction to its
+// destruction.
+class PageSession final : public ServedPage, public std::enable_shared_from_this<PageSession> {
  public:
-  PageSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot)
+  PageSession(Server::Impl& server, ByteStream&& stream, ConnectionSlot slot)
       : server_(server), socket_(std::move(stream)), slot_(std::move(slot)) {
     ++server_.admitted_pages;
     beast::error_code ignored;
-    peer_ = beast::get_lowest_layer(socket_).socket().remote_endpoint(ignored);
+    peer_ = socket_.next_layer().tcp().socket().remote_endpoint(ignored);
   }
   ~PageSession() override {
     server_.pages.erase(this);
@@ -314,7 +455,7 @@ class PageSession final : public ServedPage,
   std::uint64_t token_key() const { return reinterpret_cast<std::uintptr_t>(this); }
 
   Server::Impl& server_;
-  websocket::stream<Stream> socket_;
+  websocket::stream<ByteStream> socket_;
   ConnectionSlot slot_;
   beast::flat_buffer input_;
   tcp::endpoint peer_;  // for the log: the socket may be closed by then
@@ -323,39 +464,23 @@ class PageSession final : public ServedPage,
   bool closed_ = false;
 };
 
-// One HTTP connection on `Stream`: requests one after the other (keep-alive), until one is an
-// admitted WebSocket upgrade, which goes on as a PageSession.
-template <class Stream>
-class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream>> {
+// One HTTP connection (over TLS once its handshake is done): requests one after the other
+// (keep-alive), until one is an admitted WebSocket upgrade, which goes on as a PageSession.
+class HttpSession final : public std::enable_shared_from_this<HttpSession> {
  public:
-  // `received`: what was read of the connection already (the start of a TLS handshake).
-  HttpSession(Server::Impl& server, Stream&& stream, ConnectionSlot slot,
+  // `received`: what was read of the connection already and is not TLS's.
+  HttpSession(Server::Impl& server, ByteStream&& stream, ConnectionSlot slot,
               beast::flat_buffer received = {})
       : server_(server),
         stream_(std::move(stream)),
         slot_(std::move(slot)),
         buffer_(std::move(received)) {}
 
-  void start() {
-    if constexpr (std::is_same_v<Stream, TlsStream>) {
-      beast::get_lowest_layer(stream_).expires_after(kRequestDeadline);
-      stream_.async_handshake(
-          asio::ssl::stream_base::server, buffer_.data(),
-          [self = this->shared_from_this()](beast::error_code error, std::size_t used) {
-            if (error) return self->close();
-            self->buffer_.consume(used);
-            self->read_request();
-          });
-    } else {
-      read_request();
-    }
-  }
-
   void read_request() {
     parser_.emplace();
     head_ = false;
     parser_->header_limit(kMaxHeaderBytes);
-    beast::get_lowest_layer(stream_).expires_after(kRequestDeadline);
+    stream_.tcp().expires_after(kRequestDeadline);
     http::async_read(stream_, buffer_, *parser_,
                      [self = this->shared_from_this()](beast::error_code error, std::size_t) {
                        self->on_request(error);
@@ -395,8 +520,8 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream
       response.keep_alive(false);
       return write(std::move(response));
     }
-    beast::get_lowest_layer(stream_).expires_never();  // the WebSocket's own timeouts from here
-    std::make_shared<PageSession<Stream>>(server_, std::move(stream_), std::move(slot_))
+    stream_.tcp().expires_never();  // the WebSocket's own timeouts from here
+    std::make_shared<PageSession>(server_, std::move(stream_), std::move(slot_))
         ->accept(std::move(request));
   }
 
@@ -430,12 +555,12 @@ class HttpSession final : public std::enable_shared_from_this<HttpSession<Stream
 
   void close() {
     beast::error_code ignored;
-    beast::get_lowest_layer(stream_).socket().shutdown(tcp::socket::shutdown_send, ignored);
-    beast::get_lowest_layer(stream_).close();
+    stream_.tcp().socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream_.tcp().close();
   }
 
   Server::Impl& server_;
-  Stream stream_;
+  ByteStream stream_;
   ConnectionSlot slot_;
   beast::flat_buffer buffer_;
   std::optional<http::request_parser<http::empty_body>> parser_;
@@ -462,13 +587,7 @@ class TlsDetector final : public std::enable_shared_from_this<TlsDetector> {
  private:
   void on_detect(beast::error_code error, bool tls) {
     if (error) return stream_.close();
-    if (tls) {
-      std::make_shared<HttpSession<TlsStream>>(server_,
-                                               TlsStream(std::move(stream_), server_.tls->context),
-                                               std::move(slot_), std::move(buffer_))
-          ->start();
-      return;
-    }
+    if (tls) return handshake();
     answer_ = plain_http_answer();
     asio::async_write(stream_, asio::buffer(answer_),
                       [self = shared_from_this()](beast::error_code, std::size_t) {
@@ -476,6 +595,20 @@ class TlsDetector final : public std::enable_shared_from_this<TlsDetector> {
                         self->stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
                         self->drain();
                       });
+  }
+
+  // Under the deadline of a request's headers, which goes on from detection.
+  void handshake() {
+    tls_.emplace(std::move(stream_), server_.tls->context);
+    tls_->async_handshake(asio::ssl::stream_base::server, buffer_.data(),
+                          [self = shared_from_this()](beast::error_code error, std::size_t used) {
+                            if (error) return beast::get_lowest_layer(*self->tls_).close();
+                            self->buffer_.consume(used);
+                            std::make_shared<HttpSession>(
+                                self->server_, ByteStream(std::move(*self->tls_)),
+                                std::move(self->slot_), std::move(self->buffer_))
+                                ->read_request();
+                          });
   }
 
   // The rest of the request is read and dropped until the client closes (or the deadline):
@@ -491,6 +624,7 @@ class TlsDetector final : public std::enable_shared_from_this<TlsDetector> {
 
   Server::Impl& server_;
   beast::tcp_stream stream_;
+  std::optional<TlsStream> tls_;  // from the handshake on, over stream_
   ConnectionSlot slot_;
   beast::flat_buffer buffer_;
   std::string answer_;
@@ -558,9 +692,9 @@ void Server::Impl::accept() {
                                       ConnectionSlot(*this))
             ->run();
       } else {
-        std::make_shared<HttpSession<beast::tcp_stream>>(
-            *this, beast::tcp_stream(std::move(socket)), ConnectionSlot(*this))
-            ->start();
+        std::make_shared<HttpSession>(*this, ByteStream(beast::tcp_stream(std::move(socket))),
+                                      ConnectionSlot(*this))
+            ->read_request();
       }
     }
     accept();
