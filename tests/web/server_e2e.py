@@ -323,8 +323,11 @@ def slowpage():
     # buffer between the two, and then its outbox. Sent from a thread: without the fix the
     # server stops reading, and this would block.
     flood = web_client.WebSocket.frame('{"command":"stop","serial":"TJV000099"}') * 100000
+    # A sanitizer build on a loaded machine reads slower than this thread writes: the thread
+    # waits for it (no timeout), and the deadline below is for a server that never drops it.
+    slow.sock.settimeout(None)
     threading.Thread(target=slow.sock.sendall, args=(flood,), daemon=True).start()
-    eventually(lambda: "a page stopped reading" in open(WEB_LOG).read(), 15,
+    eventually(lambda: "a page stopped reading" in open(WEB_LOG).read(), 60,
                "the page that does not read dropped ('a page stopped reading' in teejet-web's log)")
     page = WebSocket()
     check(page.receive()["type"] == "snapshot", "the second page had no snapshot")

@@ -64,6 +64,7 @@ constexpr auto kHandshakeTimeout = 10s;
 // A page that answers nothing (not even the pings sent after half of it) is closed. Browsers
 // answer pings by themselves. TEEJET_WEB_PAGE_IDLE_S sets it for the tests.
 constexpr auto kPageIdleTimeout = 30s;
+constexpr int kPageSendBuffer = 64 * 1024;
 
 using Request = http::request<http::empty_body>;
 using Response = http::response<http::string_body>;
@@ -354,7 +355,11 @@ class PageSession final : public ServedPage, public std::enable_shared_from_this
       : server_(server), socket_(std::move(stream)), slot_(std::move(slot)) {
     ++server_.admitted_pages;
     beast::error_code ignored;
-    peer_ = socket_.next_layer().tcp().socket().remote_endpoint(ignored);
+    tcp::socket& socket = socket_.next_layer().tcp().socket();
+    peer_ = socket.remote_endpoint(ignored);
+    // Loopback's send buffer grows to megabytes: a page that stopped reading would take tens of
+    // thousands of messages to show it in its outbox; a longer message only takes more writes.
+    socket.set_option(asio::socket_base::send_buffer_size(kPageSendBuffer), ignored);
   }
   ~PageSession() override {
     server_.pages.erase(this);
