@@ -80,8 +80,11 @@ bool is_loopback(const std::string& address) {
 
 // A whole answer with the security headers, after which the connection is closed.
 std::string closing_answer(std::string_view status, std::string_view reason) {
-  return std::string("HTTP/1.1 ") + std::string(status) + "\r\n" + kSecurityHeaders +
-         "\r\nContent-Type: text/plain; charset=utf-8\r\nContent-Length: " +
+  std::string answer = "HTTP/1.1 " + std::string(status) + "\r\n";
+  for (const Header& header : kSecurityHeaders) {
+    answer.append(header.name).append(": ").append(header.value).append("\r\n");
+  }
+  return answer + "Content-Type: text/plain; charset=utf-8\r\nContent-Length: " +
          std::to_string(reason.size()) + "\r\nConnection: close\r\n\r\n" + std::string(reason);
 }
 

@@ -9,6 +9,7 @@
 //   browser).
 // - The headers every answer carries, so that no other site can frame the page.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -20,12 +21,18 @@ namespace teejet::web {
 
 // Sent with every answer, errors and the WebSocket handshake included. The page has no inline
 // script or style attribute and talks only to its own server.
-inline constexpr const char* kSecurityHeaders =
-    "X-Frame-Options: DENY\r\n"
-    "Content-Security-Policy: default-src 'self'; connect-src 'self'; frame-ancestors 'none'; "
-    "base-uri 'none'; form-action 'none'; object-src 'none'\r\n"
-    "X-Content-Type-Options: nosniff\r\n"
-    "Referrer-Policy: no-referrer";
+struct Header {
+  std::string_view name;
+  std::string_view value;
+};
+inline constexpr std::array<Header, 4> kSecurityHeaders{{
+    {"X-Frame-Options", "DENY"},
+    {"Content-Security-Policy",
+     "default-src 'self'; connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; "
+     "form-action 'none'; object-src 'none'"},
+    {"X-Content-Type-Options", "nosniff"},
+    {"Referrer-Policy", "no-referrer"},
+}};
 
 struct AllowedHosts {
   std::uint16_t port = 0;

@@ -75,15 +75,9 @@ template <class Fields>
 void set_response_headers(Fields& fields) {
   fields.set(http::field::server, "teejet-web");
   fields.set(http::field::cache_control, "no-store");
-  std::string_view lines = kSecurityHeaders;
-  while (!lines.empty()) {
-    const auto end = std::min(lines.find("\r\n"), lines.size());
-    const std::string_view line = lines.substr(0, end);
-    const auto colon = line.find(": ");
-    const std::string_view value = line.substr(colon + 2);
-    fields.set(beast::string_view(line.data(), colon),
-               beast::string_view(value.data(), value.size()));
-    lines.remove_prefix(std::min(end + 2, lines.size()));
+  for (const Header& header : kSecurityHeaders) {
+    fields.set(beast::string_view(header.name.data(), header.name.size()),
+               beast::string_view(header.value.data(), header.value.size()));
   }
 }
 
