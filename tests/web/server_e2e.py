@@ -170,10 +170,10 @@ def commands():
                 targets.append(valve["target"])
     elapsed = time.monotonic() - start
     check(states == ["accepted", "completed"], f"statuses: {states}")
-    # The gateway completes a move within its tolerance (1.0 degree by default); the simulated
-    # valve then comes to rest on its target, and the page must see that too.
-    check(position is not None and abs(position - 90.0) <= 1.0,
-          f"position at completed: {position}")
+    # The gateway completes a move within its tolerance (1.0 degree by default), but status and
+    # position are two topics with no order between them: the page may get "completed" one
+    # update before the position that earned it (87.7 once under load). The valve then comes to
+    # rest on its target, and the page must see that.
 
     def position_now():
         nonlocal position
