@@ -363,6 +363,16 @@ def start_browser(work):
     return webdriver.Chrome(service=service, options=options)
 
 
+
+def stop_processes(processes):
+    """SIGTERM each, SIGKILL what has not exited 10 s later (their exit status stays readable)."""
+    for process in processes:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--gateway", required=True)
@@ -413,12 +423,7 @@ def main():
     finally:
         if driver:
             driver.quit()
-        for process in reversed(processes):
-            process.terminate()
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
+        stop_processes(reversed(processes))
     for process, name in ((commanding, "commanding"), (read_only, "read-only"),
                           (with_token, "token")):
         if process.returncode != 0:

@@ -19,7 +19,7 @@ import sys
 import tempfile
 
 # browser_test exits 77 without python3-selenium.
-from browser_test import SERIALS, Failure, card, cards, check, degrees
+from browser_test import SERIALS, Failure, card, cards, check, degrees, stop_processes
 from browser_test import By, Select, Service, webdriver
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
@@ -113,12 +113,7 @@ def main():
     finally:
         if driver:
             driver.quit()
-        for process in (web, gateway):
-            process.terminate()
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
+        stop_processes((web, gateway))
     if web.returncode != 0:
         print(f"FAIL: teejet-web exited {web.returncode} after SIGTERM")
         return 1
