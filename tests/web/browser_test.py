@@ -363,7 +363,6 @@ def start_browser(work):
     return webdriver.Chrome(service=service, options=options)
 
 
-
 def stop_processes(processes):
     """SIGTERM each, SIGKILL what has not exited 10 s later (their exit status stays readable)."""
     for process in processes:
@@ -372,6 +371,7 @@ def stop_processes(processes):
             process.wait(timeout=10)
         except subprocess.TimeoutExpired:
             process.kill()
+
 
 def main():
     parser = argparse.ArgumentParser()
