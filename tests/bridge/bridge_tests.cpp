@@ -124,6 +124,50 @@ TEST_F(BridgeTest, HeartbeatsRefreshPresenceWithoutPollingAgain) {
   EXPECT_EQ(sink.presences()[1].last_seen_ns(), unix_nanoseconds(kStart + 1s));
 }
 
+// A power glitch in the middle of the poll burst: the requests that reached the valve before it
+// went off are lost with its RAM, the ones after are resent. Each stopped reply is asked for
+// again, alone, at the I'm Here after its quiet limit; asked for in vain, ever more rarely.
+TEST_F(BridgeTest, AReplyThatStoppedIsPolledAgainWhileOthersStillFlow) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 1, kStart);
+  ASSERT_EQ(sent().size(), 9u);
+  // Every second: I'm Here and the replies resent once a second, but no Position (resent every
+  // 0.1 s, quiet limit 2 s); run time and cycle counts (every 5 s) are quiet only after 10 s.
+  auto second = [&](std::chrono::milliseconds at) {
+    for (const codec::FromValveMessage& reply :
+         {codec::FromValveMessage{codec::Temperature{}}, codec::FromValveMessage{codec::Voltage{}},
+          codec::FromValveMessage{codec::RunCurrent{}},
+          codec::FromValveMessage{codec::DegreesPerSecond{}},
+          codec::FromValveMessage{codec::SpeedDirection{}}}) {
+      deliver(bridge, from_valve(0xD8, reply, kStart + at - 10ms));
+    }
+    announce(bridge, 0xD8, 1, kStart + at);
+    return sent();
+  };
+  EXPECT_TRUE(second(1000ms).empty());
+  EXPECT_TRUE(second(2000ms).empty());  // not over the limit yet
+  auto again = second(3000ms);
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_EQ(again[0].id, 0x18EFD8D5u);
+  EXPECT_EQ(again[0].data[0], 0x11);  // Request Position, resent every 0.1 s as first asked
+  EXPECT_EQ(again[0].data[1], 1);
+  // Asked in vain: the limit doubles to 4 s, then 8 s.
+  for (auto at = 4000ms; at <= 7000ms; at += 1000ms) EXPECT_TRUE(second(at).empty()) << at.count();
+  EXPECT_EQ(second(8000ms).size(), 1u);
+  // Heard again: back to 2 s, and it keeps flowing.
+  deliver(bridge, from_valve(0xD8, codec::Position{12.5}, kStart + 8100ms));
+  EXPECT_EQ(std::get<ValvePosition>(sink.samples().back()).degrees(), 12.5f);
+  for (auto at = 8200ms; at <= 9900ms; at += 100ms) {
+    deliver(bridge, from_valve(0xD8, codec::Position{12.5}, kStart + at));
+  }
+  EXPECT_TRUE(second(10000ms).empty());
+  // Run time and cycle counts never came: quiet at 10 s after the poll, both asked at once.
+  again = second(11000ms);
+  ASSERT_EQ(again.size(), 2u);
+  EXPECT_EQ(again[0].data[0], 0x17);
+  EXPECT_EQ(again[1].data[0], 0x18);
+}
+
 TEST_F(BridgeTest, TelemetryIsPublishedForTheSerialStampedWithReceiveTime) {
   Bridge bridge(config(), gateway_bus, sink, clock);
   announce(bridge, 0xD9, 4711, kStart);

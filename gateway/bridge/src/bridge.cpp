@@ -7,6 +7,7 @@
 
 #include "command_rate_limiter.hpp"
 #include "command_tracker.hpp"
+#include "teejet/codec/table.hpp"
 
 namespace teejet::bridge {
 namespace {
@@ -57,26 +58,8 @@ std::string boot_code_reason(std::uint32_t serial) {
   return "valve " + codec::format_serial(serial) + " is running boot code";
 }
 
-// How long a polled valve may send no telemetry before the gateway takes it for a valve that
-// restarted (its automatic resends live in RAM) and polls it again: two I'm Here periods, or two
-// of the shortest resend period of the schedule if that is longer; nullopt when nothing in the
-// schedule is resent.
-std::optional<Duration> quiet_limit(const std::vector<codec::ToValveMessage>& poll) {
-  std::optional<Duration> shortest;
-  for (const auto& request : poll) {
-    std::visit(
-        [&](const auto& m) {
-          if constexpr (requires { m.resend_tenths; }) {
-            if (m.resend_tenths == 0) return;
-            const Duration period = std::chrono::milliseconds(100) * m.resend_tenths;
-            if (!shortest || period < *shortest) shortest = period;
-          }
-        },
-        request);
-  }
-  if (!shortest) return std::nullopt;
-  return std::max(Duration{2 * kStatusPeriod}, 2 * *shortest);
-}
+// How many times the quiet limit of a reply doubles while a valve keeps not sending it.
+constexpr unsigned kMaxQuietBackoffShift = 5;
 
 // 100, 0.5: as a person would write the configured value.
 std::string number_text(double value) {
@@ -101,7 +84,7 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       sink_(sink),
       clock_(std::move(clock)),
       directory_(config_.offline_after),
-      quiet_limit_(quiet_limit(config_.poll)),
+      resent_polls_(resent_polls_of(config_.poll)),
       tracker_(std::make_unique<CommandTracker>(config_)),
       limiter_(std::make_unique<CommandRateLimiter>(config_.command_rate_per_valve,
                                                     config_.command_burst_per_valve)),
@@ -197,14 +180,13 @@ void Bridge::handle_i_am_here(std::uint8_t address, const codec::IAmHere& messag
   displaced_by_.erase(message.serial);
   if (next_deadline_) next_deadline_ = std::min(*next_deadline_, now + config_.offline_after);
   const auto valve = *directory_.find(message.serial);
-  if (!rearm && polling_went_quiet(valve, now)) {
+  if (rearm) {
+    arm_polling(valve);
+  } else if (const auto quiet = quiet_polls(valve, now); !quiet.empty()) {
     // A power glitch short of offline_after at an address nobody took: the I'm Here looks like
     // any other, only the telemetry has stopped.
-    spdlog::info("{} sends no telemetry although polled (restarted?): polling it again",
-                 codec::format_serial(valve.serial));
-    rearm = true;
+    poll_again(valve, quiet);
   }
-  if (rearm) arm_polling(valve);
   publish_presence(valve);
   settle(outcome);
 }
@@ -221,7 +203,12 @@ void Bridge::conflict_cleared(const directory::Change& change) {
 
 void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                               Timestamp received) {
-  heard_at_[serial] = clock_->steady();
+  if (const auto valve = awaited_.find(serial); valve != awaited_.end()) {
+    if (const auto reply = valve->second.find(codec::message_id(message));
+        reply != valve->second.end()) {
+      reply->second = Awaited{clock_->steady()};
+    }
+  }
   Outcome outcome;
   tracker_->heard(serial, message, outcome);
   settle(outcome);
@@ -233,21 +220,58 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
   sink_.telemetry(*sample);
 }
 
-void Bridge::arm_polling(const directory::ValveRecord& valve) {
-  for (const auto& request : config_.poll) (void)send(valve.address, request);
-  polled_at_[valve.serial] = clock_->steady();
+std::vector<Bridge::ResentPoll> Bridge::resent_polls_of(
+    const std::vector<codec::ToValveMessage>& poll) {
+  std::vector<ResentPoll> resent;
+  for (const auto& request : poll) {
+    const auto tenths = codec::field_value(request, "resend_tenths");
+    const auto reply = codec::reply_id(request);
+    if (!tenths || !reply || std::get<std::int64_t>(*tenths) == 0) continue;
+    const Duration period = std::chrono::milliseconds(100) * std::get<std::int64_t>(*tenths);
+    resent.push_back(
+        ResentPoll{request, *reply, std::max(Duration{2 * kStatusPeriod}, 2 * period)});
+  }
+  return resent;
 }
 
-bool Bridge::polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const {
-  if (!quiet_limit_ || !valve.online || valve.boot_mode || directory_.contest_of(valve.serial)) {
-    return false;
+void Bridge::arm_polling(const directory::ValveRecord& valve) {
+  for (const auto& request : config_.poll) (void)send(valve.address, request);
+  auto& awaited = awaited_[valve.serial];
+  awaited.clear();
+  for (const auto& poll : resent_polls_) awaited[poll.reply] = Awaited{clock_->steady()};
+}
+
+std::vector<const Bridge::ResentPoll*> Bridge::quiet_polls(const directory::ValveRecord& valve,
+                                                           SteadyTime now) const {
+  std::vector<const ResentPoll*> quiet;
+  const auto awaited = awaited_.find(valve.serial);
+  if (awaited == awaited_.end() || !valve.online || valve.boot_mode ||
+      directory_.contest_of(valve.serial)) {
+    return quiet;
   }
-  SteadyTime last = SteadyTime::min();
-  if (const auto it = polled_at_.find(valve.serial); it != polled_at_.end()) last = it->second;
-  if (const auto it = heard_at_.find(valve.serial); it != heard_at_.end()) {
-    last = std::max(last, it->second);
+  for (const auto& poll : resent_polls_) {
+    const auto reply = awaited->second.find(poll.reply);
+    if (reply == awaited->second.end()) continue;
+    const auto limit =
+        poll.quiet_limit * (1u << std::min(reply->second.misses, kMaxQuietBackoffShift));
+    if (now - reply->second.since > limit) quiet.push_back(&poll);
   }
-  return last != SteadyTime::min() && now - last > *quiet_limit_;
+  return quiet;
+}
+
+void Bridge::poll_again(const directory::ValveRecord& valve,
+                        const std::vector<const ResentPoll*>& polls) {
+  std::string subjects;
+  auto& awaited = awaited_[valve.serial];
+  for (const auto* poll : polls) {
+    (void)send(valve.address, poll->request);
+    auto& reply = awaited[poll->reply];
+    reply = Awaited{clock_->steady(), reply.misses + 1};
+    if (!subjects.empty()) subjects += ", ";
+    subjects += codec::subject(poll->request);
+  }
+  spdlog::info("{} sends no telemetry although polled (restarted?), none of: {}; polling it again",
+               codec::format_serial(valve.serial), subjects);
 }
 
 void Bridge::publish_presence(const directory::ValveRecord& valve) {

@@ -131,8 +131,12 @@ class Bridge {
                         Timestamp received);
   void arm_polling(const directory::ValveRecord& valve);
   void conflict_cleared(const directory::Change& change);
-  // Polled, online, and no telemetry for longer than quiet_limit_: its resends are gone.
-  bool polling_went_quiet(const directory::ValveRecord& valve, SteadyTime now) const;
+  struct ResentPoll;
+  // The resent polls of an online valve whose replies stopped for longer than their quiet limit:
+  // its resends are gone (a restart), or the request never reached it.
+  std::vector<const ResentPoll*> quiet_polls(const directory::ValveRecord& valve,
+                                             SteadyTime now) const;
+  void poll_again(const directory::ValveRecord& valve, const std::vector<const ResentPoll*>& polls);
   void publish_presence(const directory::ValveRecord& valve);
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
@@ -169,16 +173,31 @@ class Bridge {
 
   mutable std::mutex mutex_;
   directory::ValveDirectory directory_;
-  const std::optional<Duration> quiet_limit_;
+  // The poll schedule's requests that a valve resends by itself, each with how long its replies
+  // may stop before the gateway asks again: two I'm Here periods, or two of its resend periods
+  // if that is longer.
+  struct ResentPoll {
+    codec::ToValveMessage request;
+    std::uint8_t reply = 0;
+    Duration quiet_limit{};
+  };
+  static std::vector<ResentPoll> resent_polls_of(const std::vector<codec::ToValveMessage>& poll);
+  const std::vector<ResentPoll> resent_polls_;
   std::unique_ptr<CommandTracker> tracker_;
   std::unique_ptr<CommandRateLimiter> limiter_;
   std::map<std::uint32_t, std::set<ErrorKind>> latched_errors_;
   // Valves displaced from their address, and by whom: commands wait for their next I'm Here.
   std::map<std::uint32_t, std::uint32_t> displaced_by_;
-  // When each valve was last polled (arm_polling) and last sent telemetry: a restarted valve
-  // has lost its automatic resends.
-  std::map<std::uint32_t, SteadyTime> polled_at_;
-  std::map<std::uint32_t, SteadyTime> heard_at_;
+  // Per valve and resent reply: since when it is awaited (polled, or last heard) and how many
+  // times in a row it was asked for again in vain. Kept per reply, not per valve: a glitch in the
+  // middle of a poll burst leaves some resends armed and others not, and the ones still flowing
+  // must not hide the ones that stopped. A valve that never answers a request is asked again
+  // ever more rarely (its limit doubles per miss, up to 32 times).
+  struct Awaited {
+    SteadyTime since;
+    unsigned misses = 0;
+  };
+  std::map<std::uint32_t, std::map<std::uint8_t, Awaited>> awaited_;
   BridgeCounters counters_;
   // The first status waits one I'm Here period, so that its valve count means something to a
   // client that trusts it as the size of the directory.
