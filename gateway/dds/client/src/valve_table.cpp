@@ -43,13 +43,14 @@ ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
   return found;
 }
 
-void ValveTable::on_presence(const ValvePresence& presence) {
+void ValveTable::on_presence(const ValvePresence& presence, const std::string& participant) {
   Entry& found = entry(presence.serial());
   found.present = true;
   found.row.address = presence.address();
   found.row.online = presence.online();
   found.row.boot_mode = presence.boot_mode();
   found.row.gateway = presence.gateway().to_string();
+  found.row.participant = participant;
 }
 
 void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
@@ -67,7 +68,7 @@ void ValveTable::on_error_cleared(std::uint32_t serial, ErrorKind kind) {
   entry(serial).row.errors.erase(kind);
 }
 
-void ValveTable::on_gateway_status(const GatewayStatus& status) {
+void ValveTable::on_gateway_status(const GatewayStatus& status, const std::string& participant) {
   GatewaySummary& summary = gateways_[status.gateway().to_string()];
   summary.name = status.gateway().to_string();
   summary.can_interface = status.can_interface().to_string();
@@ -80,6 +81,8 @@ void ValveTable::on_gateway_status(const GatewayStatus& status) {
   summary.tx_errors = status.tx_errors();
   summary.rx_errors = status.rx_errors();
   summary.rx_dropped = status.rx_dropped();
+  summary.gateways_seen = status.gateways_seen();
+  if (!participant.empty()) summary.participants.insert(participant);
 }
 
 std::vector<ValveRow> ValveTable::rows() const {
@@ -116,8 +119,16 @@ std::size_t ValveTable::online_count() const {
   }));
 }
 
+std::size_t ValveTable::gateways_expected() const {
+  std::size_t expected = std::max<std::size_t>(gateways_matched_, 1);
+  for (const auto& [name, summary] : gateways_) {
+    expected = std::max<std::size_t>(expected, summary.gateways_seen);
+  }
+  return expected;
+}
+
 bool ValveTable::directory_complete() const {
-  if (gateways_.empty() || gateways_.size() < gateways_matched_) return false;
+  if (gateways_.size() < gateways_expected()) return false;
   for (const auto& [name, summary] : gateways_) {
     // Captured by name: clang before 16 cannot capture a structured binding.
     const auto known =

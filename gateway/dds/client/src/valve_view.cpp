@@ -31,22 +31,23 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
 }
 
 template <class Sample>
-ValveView::Reader ValveView::subscribe(std::function<void(const Sample&)> on_sample) {
+ValveView::Reader ValveView::subscribe(
+    std::function<void(const Sample&, const SampleInfo&)> on_sample) {
   Reader reader =
       reader_of(dds::topics::topic_name<Sample>(), dds::topics::topic_of<Sample>(participant_));
   if (reader == nullptr) return nullptr;
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
     // taking with mutex_ held would invert the lock order against a listener thread.
-    std::vector<Sample> samples;
+    std::vector<std::pair<Sample, SampleInfo>> samples;
     Sample sample;
     SampleInfo info;
     while (from->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-      if (info.valid_data) samples.push_back(sample);
+      if (info.valid_data) samples.emplace_back(sample, info);
     }
     if (samples.empty()) return;
     std::lock_guard lock(mutex_);
-    for (const Sample& taken : samples) on_sample(taken);
+    for (const auto& [taken, taken_info] : samples) on_sample(taken, taken_info);
     changed_.notify_all();
   });
   return reader;
@@ -65,9 +66,13 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
 }
 
 ValveView::ValveView(dds::Participant& participant) : participant_(participant) {
-  subscribe<ValvePresence>([this](const ValvePresence& sample) { table_.on_presence(sample); });
-  gateway_status_reader_ = subscribe<GatewayStatus>(
-      [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
+  subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
+    table_.on_presence(sample, dds::participant_of(info.publication_handle));
+  });
+  gateway_status_reader_ =
+      subscribe<GatewayStatus>([this](const GatewayStatus& sample, const SampleInfo& info) {
+        table_.on_gateway_status(sample, dds::participant_of(info.publication_handle));
+      });
   subscribe_telemetry(std::type_identity<dds::TelemetrySample>{});
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
@@ -83,7 +88,7 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
   const auto one = [this](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
-      subscribe<Sample>([this](const Sample& sample) {
+      subscribe<Sample>([this](const Sample& sample, const SampleInfo&) {
         table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
       });
     }

@@ -36,7 +36,8 @@ void write(DataWriter* writer, Sample sample) {
 
 }  // namespace
 
-Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(Participant& participant) {
+Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
+    Participant& participant, const std::string& gateway_name) {
   std::unique_ptr<GatewayPublisher> made(new GatewayPublisher());
   if (auto created = made->telemetry_.create(participant, topics::state_writer_qos()); !created) {
     return created.error();
@@ -48,6 +49,10 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(Participant& 
       !created) {
     return created.error();
   }
+  auto peers =
+      PeerGateways::create(participant, gateway_name, made->state_.writer<GatewayStatus>()->guid());
+  if (!peers) return peers.error();
+  made->peers_ = std::move(*peers);
   return made;
 }
 
@@ -76,7 +81,9 @@ void GatewayPublisher::command_status(const CommandStatus& status) {
 }
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {
-  write(state_.writer<GatewayStatus>(), status);
+  GatewayStatus counted = status;
+  counted.gateways_seen(peers_->count());
+  write(state_.writer<GatewayStatus>(), counted);
 }
 
 bool GatewayPublisher::wait_for_statuses(Duration timeout) {

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <functional>
 #include <map>
 #include <memory>
@@ -51,7 +52,8 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   explicit ValveView(dds::Participant& participant);
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
-  Reader subscribe(std::function<void(const Sample&)> on_sample);
+  Reader subscribe(
+      std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample);
   Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
   template <class... Samples>
   void subscribe_telemetry(std::type_identity<std::variant<Samples...>>);

@@ -25,6 +25,9 @@ inline constexpr const char* kBusFrame = "teejet/can/frame";
 // Telemetry: "teejet/valve/" and the subject of the message the sample carries (the codec's
 // name of what its request asks for: position, current, cycle_counts, baud_rate, ...).
 inline constexpr std::string_view kTelemetryPrefix = "teejet/valve/";
+// A gateway's name is the key of its status (@key string<64>): a longer one would be cut when
+// published, and two long names with a common start would become one gateway.
+inline constexpr std::size_t kMaxGatewayNameLength = 64;
 
 namespace detail {
 
