@@ -89,6 +89,23 @@ TEST(ValvectlTable, AValveRowNamesTheParticipantThatPublishesIt) {
   EXPECT_EQ(table.row(1)->gateway, "b");
 }
 
+TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBack) {
+  ValveTable table;
+  table.on_gateway_status(gateway_status("a", 2), "01.0f.aa");
+  table.on_gateway_status(gateway_status("b", 1), "01.0f.bb");
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  table.on_presence(presence(2, true, "b"), "01.0f.bb");
+  table.on_participant_liveliness("01.0f.aa", false);
+  EXPECT_TRUE(table.row(1)->gateway_lost);
+  EXPECT_FALSE(table.row(2)->gateway_lost);
+  EXPECT_EQ(table.online_count(), 1u);
+  EXPECT_TRUE(table.gateways()[0].lost);
+  EXPECT_FALSE(table.gateways()[1].lost);
+  table.on_participant_liveliness("01.0f.aa", true);
+  EXPECT_FALSE(table.row(1)->gateway_lost);
+  EXPECT_EQ(table.online_count(), 2u);
+}
+
 TEST(ValvectlTable, ErrorsLatchUntilCleared) {
   ValveTable table;
   table.on_presence(presence(1, true));

@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -135,6 +137,42 @@ TEST_F(SeveralGateways, ASecondGatewayWithTheSameNameIsReportedByBoth) {
   EXPECT_TRUE(namesake->wait_for_stdout(said, namesake->elapsed() + 30000ms)) << namesake->out();
   EXPECT_TRUE(gateways_[0]->wait_for_stdout(said, gateways_[0]->elapsed() + 30000ms))
       << gateways_[0]->out();
+}
+
+// Last: it kills rig-4. A gateway SIGKILLed (a crash, a cut cable) used to look alive for good:
+// every valve online, frozen where it was. Its state writers' liveliness lapses 3 s after.
+TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknown) {
+  Subprocess watch({VALVECTL_PATH, "--domain", std::to_string(test_domain()), "--json", "watch",
+                    "--interval", "200"});
+  const auto watched = serial_of(4, 1);
+  ASSERT_TRUE(watch.wait_for_stdout("\"serial\":\"" + codec::format_serial(watched) + "\"", 30s))
+      << watch.out() << watch.err();
+  const auto frames_before = count_of(watch.out(), "\n");
+  gateways_[3]->signal(SIGKILL);
+  // The last whole frame (a line) that says so: rig-4's four valves unknown and not online, the
+  // others as before.
+  const auto lost_frame = [&]() -> std::optional<std::string> {
+    const std::string& out = watch.out();
+    const auto end = out.rfind('\n');
+    if (end == std::string::npos) return std::nullopt;
+    const auto start = out.rfind('\n', end - 1);
+    std::string line = out.substr(start == std::string::npos ? 0 : start + 1,
+                                  end - (start == std::string::npos ? 0 : start + 1));
+    if (!contains(line, "\"gateway_lost\":true")) return std::nullopt;
+    return line;
+  };
+  std::optional<std::string> last;
+  const auto until = watch.elapsed() + 30000ms;
+  while (!(last = lost_frame()) && watch.elapsed() < until) {
+    (void)watch.wait_for_stdout("never printed", watch.elapsed() + 200ms);  // reads meanwhile
+  }
+  ASSERT_TRUE(last) << watch.err();
+  EXPECT_EQ(count_of(*last, "\"gateway_lost\":true"), 4u) << *last;
+  EXPECT_EQ(count_of(*last, "\"gateway_lost\":false"), 12u) << *last;
+  EXPECT_EQ(count_of(*last, "\"online\":true"), 12u) << *last;
+  EXPECT_GT(count_of(watch.out(), "\n"), frames_before);
+  watch.signal(SIGINT);
+  EXPECT_EQ(watch.wait(watch.elapsed() + 10000ms).exit_code, kExitOk);
 }
 
 }  // namespace

@@ -63,8 +63,8 @@ Result<client::CommandClient*> DdsSender::connected() {
   // Every gateway known by then must hear the writer; one that joins later matches it by itself.
   const std::atomic<bool> never{false};
   const auto until = Clock::now() + kConnectTimeout;
-  view_.wait_until([](const client::ValveTable& table) { return !table.gateways().empty(); },
-                   until, never);
+  view_.wait_until([](const client::ValveTable& table) { return !table.gateways().empty(); }, until,
+                   never);
   std::set<std::string> gateways;
   for (const auto& gateway : view_.snapshot().gateways()) {
     gateways.insert(gateway.participants.begin(), gateway.participants.end());

@@ -85,10 +85,24 @@ void ValveTable::on_gateway_status(const GatewayStatus& status, const std::strin
   if (!participant.empty()) summary.participants.insert(participant);
 }
 
+void ValveTable::on_participant_liveliness(const std::string& participant, bool alive) {
+  if (alive) {
+    lost_participants_.erase(participant);
+  } else {
+    lost_participants_.insert(participant);
+  }
+}
+
+ValveRow ValveTable::shown(const ValveRow& row) const {
+  ValveRow copy = row;
+  copy.gateway_lost = !row.participant.empty() && lost_participants_.contains(row.participant);
+  return copy;
+}
+
 std::vector<ValveRow> ValveTable::rows() const {
   std::vector<ValveRow> out;
   for (const auto& [serial, found] : rows_) {
-    if (found.present) out.push_back(found.row);
+    if (found.present) out.push_back(shown(found.row));
   }
   return out;
 }
@@ -96,12 +110,19 @@ std::vector<ValveRow> ValveTable::rows() const {
 std::optional<ValveRow> ValveTable::row(std::uint32_t serial) const {
   const auto it = rows_.find(serial);
   if (it == rows_.end() || !it->second.present) return std::nullopt;
-  return it->second.row;
+  return shown(it->second.row);
 }
 
 std::vector<GatewaySummary> ValveTable::gateways() const {
   std::vector<GatewaySummary> out;
-  for (const auto& [name, summary] : gateways_) out.push_back(summary);
+  for (const auto& [name, summary] : gateways_) {
+    out.push_back(summary);
+    out.back().lost = !summary.participants.empty() &&
+                      std::all_of(summary.participants.begin(), summary.participants.end(),
+                                  [this](const std::string& participant) {
+                                    return lost_participants_.contains(participant);
+                                  });
+  }
   return out;
 }
 
@@ -114,9 +135,11 @@ std::optional<Reply> ValveTable::reply(std::uint32_t serial, std::string_view su
 }
 
 std::size_t ValveTable::online_count() const {
-  return static_cast<std::size_t>(std::count_if(rows_.begin(), rows_.end(), [](const auto& item) {
-    return item.second.present && item.second.row.online;
-  }));
+  return static_cast<std::size_t>(
+      std::count_if(rows_.begin(), rows_.end(), [this](const auto& item) {
+        return item.second.present && item.second.row.online &&
+               !lost_participants_.contains(item.second.row.participant);
+      }));
 }
 
 std::size_t ValveTable::gateways_expected() const {

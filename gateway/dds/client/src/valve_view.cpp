@@ -21,8 +21,11 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
     failure_ = topic.error();
     return nullptr;
   }
-  // No listener yet: create() attaches them once handlers_ is complete.
-  auto reader = participant_.reader(*topic, dds::topics::state_reader_qos());
+  // No listener yet: create() attaches them once handlers_ is complete. Gateway status follows
+  // its writers' liveliness: a gateway that dies without a word is shown lost.
+  auto reader = participant_.reader(*topic, topic_name == dds::topics::kGatewayStatus
+                                                ? dds::topics::liveliness_reader_qos()
+                                                : dds::topics::state_reader_qos());
   if (!reader) {
     failure_ = Error{reader.error().code, reader.error().reason + " (" + topic_name + ")"};
     return nullptr;
@@ -57,9 +60,14 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
   std::unique_ptr<ValveView> view(new ValveView(participant));
   if (view->failure_) return *view->failure_;
   // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
-  // that arrived before a reader had its listener are taken right after.
+  // that arrived before a reader had its listener are taken right after. Gateway status also
+  // tells when a gateway's writers lost their liveliness.
   for (const auto& [reader, handler] : view->handlers_) {
-    reader->set_listener(view.get(), eprosima::fastdds::dds::StatusMask::data_available());
+    const auto mask = reader == view->gateway_status_reader_
+                          ? eprosima::fastdds::dds::StatusMask::data_available()
+                                << eprosima::fastdds::dds::StatusMask::liveliness_changed()
+                          : eprosima::fastdds::dds::StatusMask::data_available();
+    reader->set_listener(view.get(), mask);
   }
   for (const auto& [reader, handler] : view->handlers_) handler(reader);
   return view;
@@ -127,6 +135,18 @@ void ValveView::take_errors(Reader reader) {
 
 void ValveView::on_data_available(DataReader* reader) {
   if (const auto it = handlers_.find(reader); it != handlers_.end()) it->second(reader);
+}
+
+void ValveView::on_liveliness_changed(
+    DataReader* /*reader*/, const eprosima::fastdds::dds::LivelinessChangedStatus& status) {
+  // One writer per gateway on this topic: its participant is the gateway's.
+  const bool back = status.alive_count_change > 0;
+  const bool gone = status.not_alive_count_change > 0 ||
+                    (status.alive_count_change < 0 && status.not_alive_count_change == 0);
+  if (!back && !gone) return;
+  std::lock_guard lock(mutex_);
+  table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle), back);
+  changed_.notify_all();
 }
 
 ValveTable ValveView::snapshot() const {

@@ -51,8 +51,16 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
   }
   auto peers =
       PeerGateways::create(participant, gateway_name, made->state_.writer<GatewayStatus>()->guid());
-  if (!peers) return peers.error();
-  made->peers_ = std::move(*peers);
+  if (peers) {
+    made->peers_ = std::move(*peers);
+  } else {
+    // Permissions made before gateways read each other's status: run, and say what is missing.
+    spdlog::warn(
+        "cannot read {} ({}): this gateway counts only itself in gateways_seen, so clients may "
+        "call a valve unknown before they have met every gateway; give the gateway role "
+        "subscribe permission for it (config/security/roles/gateway.xml)",
+        topics::kGatewayStatus, peers.error().reason);
+  }
   return made;
 }
 
@@ -82,7 +90,7 @@ void GatewayPublisher::command_status(const CommandStatus& status) {
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {
   GatewayStatus counted = status;
-  counted.gateways_seen(peers_->count());
+  counted.gateways_seen(peers_ ? peers_->count() : 1);
   write(state_.writer<GatewayStatus>(), counted);
 }
 

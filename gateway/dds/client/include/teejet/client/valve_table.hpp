@@ -36,6 +36,9 @@ struct ValveRow {
   // The DDS participant that publishes it (its GUID prefix, "01.0f.…"): the gateway whose
   // command reader must hear a command to it.
   std::string participant;
+  // Its gateway vanished (its writers' liveliness lapsed, or it left): what the row says is the
+  // last word, and whether the valve is online is unknown.
+  bool gateway_lost = false;
   std::set<ErrorKind> errors;                           // latched, until Clear Errors
   std::map<std::string, Reply, std::less<>> telemetry;  // by subject, the latest of each
 
@@ -62,6 +65,7 @@ struct GatewaySummary {
   // The participants publishing status under this name: more than one is two gateways
   // sharing a name.
   std::set<std::string> participants;
+  bool lost = false;  // every participant under this name vanished
 };
 
 class ValveTable {
@@ -74,13 +78,16 @@ class ValveTable {
   void on_error(std::uint32_t serial, ErrorKind kind);
   void on_error_cleared(std::uint32_t serial, ErrorKind kind);
   void on_gateway_status(const GatewayStatus& status, const std::string& participant = {});
+  // A gateway's participant whose writers lost their liveliness or left (alive false), or came
+  // back (true).
+  void on_participant_liveliness(const std::string& participant, bool alive);
 
   // Valves with a presence sample, by serial.
   std::vector<ValveRow> rows() const;
   std::optional<ValveRow> row(std::uint32_t serial) const;
   std::vector<GatewaySummary> gateways() const;  // by name
   std::optional<Reply> reply(std::uint32_t serial, std::string_view subject) const;
-  std::size_t online_count() const;
+  std::size_t online_count() const;  // online and with a gateway alive
 
   // How many gateways discovery has found so far (writers of gateway status matched).
   void set_gateways_matched(std::size_t count) { gateways_matched_ = count; }
@@ -103,10 +110,12 @@ class ValveTable {
     bool present = false;
   };
   Entry& entry(std::uint32_t serial);
+  ValveRow shown(const ValveRow& row) const;  // with gateway_lost filled in
 
   std::map<std::uint32_t, Entry> rows_;
   std::map<std::string, GatewaySummary> gateways_;
   std::size_t gateways_matched_ = 0;
+  std::set<std::string> lost_participants_;
 };
 
 }  // namespace teejet::client

@@ -45,6 +45,11 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
                   const std::atomic<bool>& interrupted) const;
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+  // Gateway status only: a gateway whose writers lost their liveliness (it died without a word)
+  // or left is marked lost in the table.
+  void on_liveliness_changed(
+      eprosima::fastdds::dds::DataReader* reader,
+      const eprosima::fastdds::dds::LivelinessChangedStatus& status) override;
 
  private:
   using Reader = eprosima::fastdds::dds::DataReader*;
