@@ -5,10 +5,12 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <csignal>
 
 #include "teejet/command_line.hpp"
+#include "teejet/dds/topics.hpp"
 #include "teejet/gateway/config.hpp"
 #include "teejet/gateway/gateway.hpp"
 
@@ -53,7 +55,9 @@ void survive_failed_writes() {
 std::string default_gateway_name() {
   char host[256] = {};
   ::gethostname(host, sizeof host - 1);
-  return std::string("teejet-gateway@") + host;
+  std::string name = std::string("teejet-gateway@") + host;
+  name.resize(std::min(name.size(), teejet::dds::topics::kMaxGatewayNameLength));
+  return name;
 }
 
 // The options as given; configure() applies only those the user named (app.count()).
@@ -106,6 +110,16 @@ teejet::Result<teejet::gateway::GatewayConfig> configure(const CLI::App& app,
     return teejet::Error{
         teejet::ErrorCode::kInvalidValue,
         "no CAN bus: give --can IFACE (or sim:N), or gateway.can in the config file"};
+  }
+  const auto& name = config.bridge.gateway_name;
+  if (name.empty() || name.size() > teejet::dds::topics::kMaxGatewayNameLength) {
+    return teejet::Error{
+        teejet::ErrorCode::kInvalidValue,
+        "the gateway name \"" + name + "\" is " + std::to_string(name.size()) +
+            " characters long; it must be 1 to " +
+            std::to_string(teejet::dds::topics::kMaxGatewayNameLength) +
+            " (it keys teejet/gateway/status: a longer one would be cut and could become "
+            "another gateway's)"};
   }
   return config;
 }

@@ -59,6 +59,53 @@ TEST(ValvectlTable, DirectoryIsCompleteWhenEveryMatchedGatewayHasToldAllItKnows)
   EXPECT_TRUE(table.directory_complete());
 }
 
+// Discovery finds gateways one by one: a client that has met one of eight must not judge the
+// directory complete. Each gateway says how many it hears on the domain.
+TEST(ValvectlTable, DirectoryWaitsForEveryGatewayThatAGatewaySaysItHears) {
+  ValveTable table;
+  table.set_gateways_matched(1);
+  auto a = gateway_status("a", 1);
+  a.gateways_seen(3);
+  table.on_gateway_status(a, "01.0f.aa");
+  table.on_presence(presence(1, true, "a"));
+  EXPECT_EQ(table.gateways_expected(), 3u);
+  EXPECT_FALSE(table.directory_complete());
+  auto b = gateway_status("b", 0);
+  b.gateways_seen(2);  // b has not heard c yet: the most any gateway says counts
+  table.on_gateway_status(b, "01.0f.bb");
+  EXPECT_FALSE(table.directory_complete());
+  table.on_gateway_status(gateway_status("c", 0), "01.0f.cc");
+  EXPECT_EQ(table.gateways_expected(), 3u);
+  EXPECT_TRUE(table.directory_complete());
+  EXPECT_EQ(table.gateways()[0].participants, std::set<std::string>{"01.0f.aa"});
+}
+
+TEST(ValvectlTable, AValveRowNamesTheParticipantThatPublishesIt) {
+  ValveTable table;
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  EXPECT_EQ(table.row(1)->participant, "01.0f.aa");
+  table.on_presence(presence(1, true, "b"), "01.0f.bb");  // moved to another gateway's bus
+  EXPECT_EQ(table.row(1)->participant, "01.0f.bb");
+  EXPECT_EQ(table.row(1)->gateway, "b");
+}
+
+TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBack) {
+  ValveTable table;
+  table.on_gateway_status(gateway_status("a", 2), "01.0f.aa");
+  table.on_gateway_status(gateway_status("b", 1), "01.0f.bb");
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  table.on_presence(presence(2, true, "b"), "01.0f.bb");
+  table.on_participant_liveliness("01.0f.aa", false);
+  EXPECT_TRUE(table.row(1)->gateway_lost);
+  EXPECT_FALSE(table.row(2)->gateway_lost);
+  EXPECT_EQ(table.online_count(), 1u);
+  EXPECT_TRUE(table.gateways()[0].lost);
+  EXPECT_FALSE(table.gateways()[1].lost);
+  table.on_participant_liveliness("01.0f.aa", true);
+  EXPECT_FALSE(table.row(1)->gateway_lost);
+  EXPECT_EQ(table.online_count(), 2u);
+}
+
 TEST(ValvectlTable, ErrorsLatchUntilCleared) {
   ValveTable table;
   table.on_presence(presence(1, true));

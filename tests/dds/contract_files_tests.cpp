@@ -57,10 +57,11 @@ std::set<std::string> role_topics(const std::string& role, const std::string& di
   return topics;
 }
 
-TEST(ContractFiles, TheGatewayRolePublishesEveryTopicButCommandsAndReadsOnlyThem) {
+TEST(ContractFiles, TheGatewayRolePublishesEveryTopicButCommandsAndReadsCommandsAndStatus) {
   EXPECT_EQ(role_topics("gateway", "publish"), every_topic_but_commands())
       << "config/security/roles/gateway.xml";
-  EXPECT_EQ(role_topics("gateway", "subscribe"), std::set<std::string>{topics::kCommand});
+  EXPECT_EQ(role_topics("gateway", "subscribe"),
+            (std::set<std::string>{topics::kCommand, topics::kGatewayStatus}));
 }
 
 TEST(ContractFiles, TheObserverRoleReadsEveryTopicButCommands) {

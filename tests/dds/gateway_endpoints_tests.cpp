@@ -87,7 +87,7 @@ class GatewayEndpointsTest : public ::testing::Test {
     auto participant = Participant::create({.domain = test_domain(), .name = "gateway-under-test"});
     ASSERT_TRUE(participant) << participant.error().reason;
     gateway = std::move(*participant);
-    auto made = GatewayPublisher::create(*gateway);
+    auto made = GatewayPublisher::create(*gateway, "gateway-under-test");
     ASSERT_TRUE(made) << made.error().reason;
     publisher = std::move(*made);
   }

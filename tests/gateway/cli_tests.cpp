@@ -61,6 +61,16 @@ TEST(GatewayCommandLine, EmptyValuesAreUsageErrorsNamingTheOption) {
   expect_usage_error({"--can", "sim:1", "--name", ""}, "--name: the value is empty");
 }
 
+// The name keys teejet/gateway/status (string<64>): a longer one would be published cut, and
+// two long names with a common start would become one gateway.
+TEST(GatewayCommandLine, ANameLongerThanTheStatusKeyIsRefused) {
+  const std::string longest(64, 'g');
+  expect_usage_error({"--can", "sim:1", "--name", longest + "h"},
+                     "the gateway name \"" + longest +
+                         "h\" is 65 characters long; it must be 1 "
+                         "to 64");
+}
+
 TEST(GatewayCommandLine, HelpAndVersionExitZero) {
   const auto help = run_gateway({"--help"});
   EXPECT_EQ(help.exit_code, 0);

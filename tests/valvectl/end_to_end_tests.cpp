@@ -239,7 +239,8 @@ TEST_F(ValvectlEndToEnd, UnknownSerialExits2WithoutWaitingTheWholeTimeout) {
   EXPECT_FALSE(unknown.timed_out) << "valvectl waited for its --timeout";
   EXPECT_EQ(unknown.exit_code, kExitNotFound) << describe(unknown);
   EXPECT_TRUE(contains(unknown.err,
-                       "valve TJV000123 is not known to any gateway on domain " + domain_text()))
+                       "valve TJV000123 is not known to any of the 1 gateway(s) on domain " +
+                           domain_text() + " (" + std::to_string(kValveCount + 1) + " valves)"))
       << describe(unknown);
   std::printf("[ measured ] valvectl: an unknown serial refused after %lld ms\n",
               static_cast<long long>(unknown.took.count()));

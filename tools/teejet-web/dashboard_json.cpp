@@ -47,6 +47,7 @@ nlohmann::json gateway_json(const client::GatewaySummary& gateway) {
       {"rx_dropped", gateway.rx_dropped},
       {"valves_online", gateway.valves_online},
       {"valves_known", gateway.valves_known},
+      {"lost", gateway.lost},
   };
 }
 

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <iterator>
+#include <set>
 #include <utility>
 
 namespace teejet::web {
@@ -59,12 +60,24 @@ Result<client::CommandClient*> DdsSender::connected() {
   }
   auto made = client::CommandClient::create(participant_, client::default_origin("teejet-web"));
   if (!made) return made.error();
-  const std::size_t gateways = std::max<std::size_t>(1, view_.snapshot().gateways().size());
+  // Every gateway known by then must hear the writer; one that joins later matches it by itself.
   const std::atomic<bool> never{false};
-  const auto matched = (*made)->connect(gateways, 0, Clock::now() + kConnectTimeout, never);
+  const auto until = Clock::now() + kConnectTimeout;
+  view_.wait_until([](const client::ValveTable& table) { return !table.gateways().empty(); }, until,
+                   never);
+  std::set<std::string> gateways;
+  for (const auto& gateway : view_.snapshot().gateways()) {
+    gateways.insert(gateway.participants.begin(), gateway.participants.end());
+  }
+  if (gateways.empty()) return Error{ErrorCode::kInvalidValue, "no gateway found (waited 5 s)"};
+  const auto matched = (*made)->connect(gateways, 0, until, never);
   if (!matched) return matched.error();
   if (!*matched) {
-    return Error{ErrorCode::kInvalidValue, "no gateway subscribes to commands (waited 5 s)"};
+    const auto missing = (*made)->unmatched(gateways).size();
+    return Error{ErrorCode::kInvalidValue, std::to_string(missing) + " of " +
+                                               std::to_string(gateways.size()) +
+                                               " gateways did not subscribe to commands "
+                                               "within 5 s"};
   }
   std::lock_guard lock(mutex_);
   client_ = std::move(*made);

@@ -62,7 +62,7 @@ std::string render_table(const std::vector<ValveRow>& rows) {
     cells.push_back({
         codec::format_serial(row.serial),
         address_text(row.address),
-        row.boot_mode ? "boot" : (row.online ? "yes" : "no"),
+        row.gateway_lost ? "unknown" : (row.boot_mode ? "boot" : (row.online ? "yes" : "no")),
         row.position_degrees() ? one_decimal(*row.position_degrees()) : "-",
         row.temperature_c() ? std::to_string(*row.temperature_c()) : "-",
         row.volts() ? one_decimal(*row.volts()) : "-",
@@ -99,6 +99,7 @@ std::string render_gateways(const std::vector<GatewaySummary>& gateways) {
   for (const GatewaySummary& gateway : gateways) {
     out << "gateway " << gateway.name;
     if (!gateway.can_interface.empty()) out << " on " << gateway.can_interface;
+    if (gateway.lost) out << ": LOST (no word from it: killed, powered off or cut off); last said";
     out << ": " << dds::to_string(gateway.bus_state) << ", " << gateway.valves_online << '/'
         << gateway.valves_known << " valves online, " << gateway.frames_in << " frames in, "
         << gateway.frames_out << " out, " << gateway.decode_errors << " decode errors\n";

@@ -211,15 +211,29 @@ class Session {
       if (terminal_.interrupted) return kExitInterrupted;
       const ValveTable table = view_.snapshot();
       if (table.row(serial)) continue;
-      if (table.empty()) {
-        complain("no gateway found on " + domain_text());
-      } else {
-        complain("valve " + codec::format_serial(serial) + " is not known to any gateway on " +
-                 domain_text());
-      }
+      complain(not_found_text(table, serial));
       return kExitNotFound;
     }
     return request.serials;
+  }
+
+  // Why `serial` is not in `table`, saying how far discovery got: a valve is called unknown
+  // only when every gateway there is to meet has told all it knows.
+  std::string not_found_text(const ValveTable& table, std::uint32_t serial) const {
+    if (table.empty()) {
+      return "no gateway found on " + domain_text() + " within " +
+             seconds_text(invocation_.global.timeout);
+    }
+    const auto met = table.gateways().size();
+    const auto valves = std::to_string(table.rows().size()) + " valves";
+    if (table.directory_complete()) {
+      return "valve " + codec::format_serial(serial) + " is not known to any of the " +
+             std::to_string(met) + " gateway(s) on " + domain_text() + " (" + valves + ")";
+    }
+    return "valve " + codec::format_serial(serial) + " was not found within " +
+           seconds_text(invocation_.global.timeout) + " on " + domain_text() + ": met " +
+           std::to_string(met) + " of " + std::to_string(table.gateways_expected()) +
+           " gateway(s), " + valves + "; discovery was still going on (try a longer --timeout)";
   }
 
   int command() {
@@ -228,11 +242,12 @@ class Session {
     const auto& serials = std::get<std::vector<std::uint32_t>>(targets);
     if (serials.empty()) return kExitOk;
 
-    // Every gateway that owns one of the valves must hear the command.
+    // Every gateway that owns one of the valves must hear the command: its own reader, not
+    // just as many readers as there are owners.
     const ValveTable table = view_.snapshot();
-    std::set<std::string> gateways;
-    for (const std::uint32_t serial : serials) gateways.insert(table.row(serial)->gateway);
-    const std::size_t expected_gateways = std::max(gateways.size(), table.gateways().size());
+    std::set<std::string> owners;
+    for (const std::uint32_t serial : serials) owners.insert(table.row(serial)->participant);
+    owners.erase(std::string{});
 
     auto made = CommandClient::create(*participant_, default_origin("valvectl"));
     if (!made) {
@@ -240,7 +255,7 @@ class Session {
       return kExitFailure;
     }
     CommandClient& client = **made;
-    const auto connected = client.connect(expected_gateways, invocation_.global.command_readers,
+    const auto connected = client.connect(owners, invocation_.global.command_readers,
                                           after_timeout(), terminal_.interrupted);
     if (!connected) {
       complain(connected.error().reason);
@@ -248,7 +263,7 @@ class Session {
     }
     if (!*connected) {
       if (terminal_.interrupted) return kExitInterrupted;
-      complain("no gateway on " + domain_text() + " subscribes to commands");
+      complain(unmatched_text(table, serials, client.unmatched(owners)));
       return kExitNotFound;
     }
     std::vector<std::pair<std::uint32_t, std::uint32_t>> sent;  // serial, command id
@@ -275,6 +290,20 @@ class Session {
       worst = std::max<int>(worst, kExitTimedOut);
     }
     return worst;
+  }
+
+  // Which owners did not subscribe, by gateway name and the valves they own.
+  std::string unmatched_text(const ValveTable& table, const std::vector<std::uint32_t>& serials,
+                             const std::set<std::string>& missing) const {
+    std::string text;
+    for (const std::uint32_t serial : serials) {
+      const auto row = table.row(serial);
+      if (!row || !missing.contains(row->participant)) continue;
+      text += text.empty() ? "" : ", ";
+      text += "gateway " + row->gateway + " (owner of " + codec::format_serial(serial) + ")";
+    }
+    return text + " did not subscribe to commands within " +
+           seconds_text(invocation_.global.timeout) + " on " + domain_text() + "; nothing was sent";
   }
 
   // Prints the command's statuses up to the first one (or, with --wait, the final one) and

@@ -51,7 +51,7 @@ Status Gateway::start() {
        }});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
-  auto publisher = dds::GatewayPublisher::create(*participant_);
+  auto publisher = dds::GatewayPublisher::create(*participant_, config_.bridge.gateway_name);
   if (!publisher) return fail(publisher.error());
   publisher_ = std::move(*publisher);
   if (config_.record_frames) {

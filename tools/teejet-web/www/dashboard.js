@@ -216,9 +216,11 @@
 
   function fillCard(valve) {
     const d = valve.data, card = valve.card;
-    card.dataset.online = String(d.online);
-    const online = el("span", { class: "online-state", "data-online": String(d.online) },
-                      d.online ? "online" : "offline");
+    // A valve whose gateway vanished may still be moving: say that nobody knows.
+    const state = d.gateway_lost ? "unknown" : String(d.online);
+    card.dataset.online = state;
+    const online = el("span", { class: "online-state", "data-online": state },
+                      d.gateway_lost ? "unknown (gateway lost)" : d.online ? "online" : "offline");
     card.querySelector(".meta").replaceChildren(
       `address ${d.address} · gateway ${d.gateway || dash} · `, online,
       d.boot_mode ? " · boot mode" : "");
@@ -386,8 +388,10 @@
     }
     const row = (label, value, attrs) => el("tr", {}, el("td", {}, label),
                                             el("td", attrs || {}, String(value)));
+    panel.dataset.lost = String(g.lost);
     panel.replaceChildren(
-      el("h3", { class: "hint" }, `${g.gateway} on ${g.can_interface}`),
+      el("h3", { class: "hint" }, `${g.gateway} on ${g.can_interface}`,
+         g.lost ? el("span", { class: "lost" }, " · LOST (no word from it)") : ""),
       el("table", {},
          row("bus state", g.bus_state, { class: "bus-state", "data-state": g.bus_state }),
          row("tx / rx errors", `${g.tx_errors} / ${g.rx_errors}`),

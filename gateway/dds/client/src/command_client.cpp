@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
@@ -35,14 +37,26 @@ std::uint32_t random_first_id() {
 // How long the extra readers of --command-readers get to match this writer on their own side.
 constexpr auto kReaderSideOfMatch = std::chrono::milliseconds(250);
 
-bool wait_for_match(const std::function<int()>& matched, std::size_t wanted, Deadline until,
-                    const std::atomic<bool>& interrupted) {
-  // Fast DDS offers no wait on a matched count without a listener; polling is cheap and short.
-  while (static_cast<std::size_t>(matched()) < wanted) {
-    if (interrupted || std::chrono::steady_clock::now() >= until) return matched() > 0;
+// Fast DDS offers no wait on matches without a listener of one's own; polling is cheap and short.
+bool wait_for(const std::function<bool()>& done, Deadline until,
+              const std::atomic<bool>& interrupted) {
+  while (!done()) {
+    if (interrupted || std::chrono::steady_clock::now() >= until) return false;
     std::this_thread::sleep_for(kMatchPoll);
   }
   return true;
+}
+
+void count_match(std::multiset<std::string>& participants, int change,
+                 const eprosima::fastrtps::rtps::InstanceHandle_t& endpoint) {
+  const auto participant = dds::participant_of(endpoint);
+  if (change > 0) {
+    participants.insert(participant);
+  } else if (change < 0) {
+    if (const auto it = participants.find(participant); it != participants.end()) {
+      participants.erase(it);
+    }
+  }
 }
 
 }  // namespace
@@ -61,6 +75,22 @@ std::string default_origin(std::string_view program) {
   return origin + pid;
 }
 
+class CommandClient::CommandWriterMatches final
+    : public eprosima::fastdds::dds::DataWriterListener {
+ public:
+  explicit CommandWriterMatches(CommandClient& client) : client_(client) {}
+  void on_publication_matched(
+      eprosima::fastdds::dds::DataWriter* /*writer*/,
+      const eprosima::fastdds::dds::PublicationMatchedStatus& status) override {
+    std::lock_guard lock(client_.match_mutex_);
+    count_match(client_.command_readers_, status.current_count_change,
+                status.last_subscription_handle);
+  }
+
+ private:
+  CommandClient& client_;
+};
+
 CommandClient::CommandClient(dds::Participant& participant, std::string origin)
     : participant_(participant), origin_(std::move(origin)), next_id_(random_first_id()) {}
 
@@ -69,8 +99,10 @@ Result<std::unique_ptr<CommandClient>> CommandClient::create(dds::Participant& p
   std::unique_ptr<CommandClient> client(new CommandClient(participant, std::move(origin)));
   auto topic = participant.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus);
   if (!topic) return topic.error();
-  auto reader = participant.reader(*topic, dds::topics::status_reader_qos(), client.get(),
-                                   eprosima::fastdds::dds::StatusMask::data_available());
+  auto reader =
+      participant.reader(*topic, dds::topics::status_reader_qos(), client.get(),
+                         eprosima::fastdds::dds::StatusMask::data_available()
+                             << eprosima::fastdds::dds::StatusMask::subscription_matched());
   if (!reader) return reader.error();
   client->status_reader_ = *reader;
   return client;
@@ -82,21 +114,41 @@ CommandClient::~CommandClient() {
   participant_.delete_writer(command_writer_);
 }
 
-Result<bool> CommandClient::connect(std::size_t gateways, std::size_t command_readers,
-                                    Deadline until, const std::atomic<bool>& interrupted) {
-  const std::size_t wanted = std::max<std::size_t>(gateways, 1);
-  const bool reader_matched = wait_for_match(
-      [this] {
-        eprosima::fastdds::dds::SubscriptionMatchedStatus status;
-        status_reader_->get_subscription_matched_status(status);
-        return status.current_count;
+bool CommandClient::matched_by(const std::set<std::string>& owners) const {
+  return std::all_of(owners.begin(), owners.end(), [this](const std::string& owner) {
+    return status_writers_.contains(owner) && command_readers_.contains(owner);
+  });
+}
+
+std::set<std::string> CommandClient::unmatched(const std::set<std::string>& owners) const {
+  std::lock_guard lock(match_mutex_);
+  std::set<std::string> missing;
+  for (const auto& owner : owners) {
+    if (!status_writers_.contains(owner) || !command_readers_.contains(owner)) {
+      missing.insert(owner);
+    }
+  }
+  return missing;
+}
+
+Result<bool> CommandClient::connect(const std::set<std::string>& owners,
+                                    std::size_t command_readers, Deadline until,
+                                    const std::atomic<bool>& interrupted) {
+  const bool reader_matched = wait_for(
+      [&] {
+        std::lock_guard lock(match_mutex_);
+        return std::all_of(owners.begin(), owners.end(), [this](const std::string& owner) {
+          return status_writers_.contains(owner);
+        });
       },
-      wanted, until, interrupted);
+      until, interrupted);
   if (!reader_matched) return false;
   if (command_writer_ == nullptr) {
     auto topic = participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand);
     if (!topic) return topic.error();
-    auto writer = participant_.writer(*topic, dds::topics::command_writer_qos());
+    writer_matches_ = std::make_unique<CommandWriterMatches>(*this);
+    auto writer =
+        participant_.writer(*topic, dds::topics::command_writer_qos(), writer_matches_.get());
     // The QoS is fixed, so a refusal here is DDS-Security: an observer's permissions say no.
     if (!writer) {
       return Error{ErrorCode::kDds, std::string("this participant may not write ") +
@@ -106,21 +158,28 @@ Result<bool> CommandClient::connect(std::size_t gateways, std::size_t command_re
     }
     command_writer_ = *writer;
   }
-  // Commands are VOLATILE: one written before the gateway's reader matched would be lost.
-  const bool matched = wait_for_match(
-      [this] {
-        eprosima::fastdds::dds::PublicationMatchedStatus status;
-        command_writer_->get_publication_matched_status(status);
-        return status.current_count;
+  const bool matched = wait_for(
+      [&] {
+        std::lock_guard lock(match_mutex_);
+        return matched_by(owners);
       },
-      std::max(wanted, command_readers), until, interrupted);
-  // The writer's side of a match comes first; a busy reader (a recorder taking thousands of
-  // samples a second) may learn of this writer later. A Fast DDS reader then repairs what it
-  // missed from this writer (delivered() keeps the writer until it has); a VOLATILE reader of
-  // some other vendors instead skips what the first heartbeat it hears already counts (see
-  // status_reader_qos). Asked-for extra readers get a moment more for that.
-  if (matched && command_readers > wanted) std::this_thread::sleep_for(kReaderSideOfMatch);
-  return matched;
+      until, interrupted);
+  if (!matched) return false;
+  // Readers beyond the owners (a recorder) are waited for until `until`, then the commands go.
+  const auto readers = [this] {
+    std::lock_guard lock(match_mutex_);
+    return command_readers_.size();
+  };
+  if (command_readers > owners.size()) {
+    wait_for([&] { return readers() >= command_readers; }, until, interrupted);
+    // The writer's side of a match comes first; a busy reader (a recorder taking thousands of
+    // samples a second) may learn of this writer later. A Fast DDS reader then repairs what it
+    // missed from this writer (delivered() keeps the writer until it has); a VOLATILE reader of
+    // some other vendors instead skips what the first heartbeat it hears already counts (see
+    // status_reader_qos). Asked-for extra readers get a moment more for that.
+    std::this_thread::sleep_for(kReaderSideOfMatch);
+  }
+  return true;
 }
 
 std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
@@ -145,6 +204,12 @@ std::optional<CommandStatus> CommandClient::next_status(std::uint32_t id, Deadli
   CommandStatus status = std::move(queue.front());
   queue.pop_front();
   return status;
+}
+
+void CommandClient::on_subscription_matched(
+    DataReader* /*reader*/, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
+  std::lock_guard lock(match_mutex_);
+  count_match(status_writers_, status.current_count_change, status.last_publication_handle);
 }
 
 void CommandClient::on_data_available(DataReader* reader) {

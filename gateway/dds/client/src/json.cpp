@@ -45,7 +45,8 @@ nlohmann::json to_json(const ValveRow& row) {
   return {
       {"serial", codec::format_serial(row.serial)},
       {"address", row.address},
-      {"online", row.online},
+      {"online", row.online && !row.gateway_lost},  // never online without a live gateway
+      {"gateway_lost", row.gateway_lost},
       {"boot_mode", row.boot_mode},
       {"position", optional(row.position_degrees())},
       {"temperature_c", optional(row.temperature_c())},

@@ -43,13 +43,14 @@ ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
   return found;
 }
 
-void ValveTable::on_presence(const ValvePresence& presence) {
+void ValveTable::on_presence(const ValvePresence& presence, const std::string& participant) {
   Entry& found = entry(presence.serial());
   found.present = true;
   found.row.address = presence.address();
   found.row.online = presence.online();
   found.row.boot_mode = presence.boot_mode();
   found.row.gateway = presence.gateway().to_string();
+  found.row.participant = participant;
 }
 
 void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
@@ -67,7 +68,7 @@ void ValveTable::on_error_cleared(std::uint32_t serial, ErrorKind kind) {
   entry(serial).row.errors.erase(kind);
 }
 
-void ValveTable::on_gateway_status(const GatewayStatus& status) {
+void ValveTable::on_gateway_status(const GatewayStatus& status, const std::string& participant) {
   GatewaySummary& summary = gateways_[status.gateway().to_string()];
   summary.name = status.gateway().to_string();
   summary.can_interface = status.can_interface().to_string();
@@ -80,12 +81,28 @@ void ValveTable::on_gateway_status(const GatewayStatus& status) {
   summary.tx_errors = status.tx_errors();
   summary.rx_errors = status.rx_errors();
   summary.rx_dropped = status.rx_dropped();
+  summary.gateways_seen = status.gateways_seen();
+  if (!participant.empty()) summary.participants.insert(participant);
+}
+
+void ValveTable::on_participant_liveliness(const std::string& participant, bool alive) {
+  if (alive) {
+    lost_participants_.erase(participant);
+  } else {
+    lost_participants_.insert(participant);
+  }
+}
+
+ValveRow ValveTable::shown(const ValveRow& row) const {
+  ValveRow copy = row;
+  copy.gateway_lost = !row.participant.empty() && lost_participants_.contains(row.participant);
+  return copy;
 }
 
 std::vector<ValveRow> ValveTable::rows() const {
   std::vector<ValveRow> out;
   for (const auto& [serial, found] : rows_) {
-    if (found.present) out.push_back(found.row);
+    if (found.present) out.push_back(shown(found.row));
   }
   return out;
 }
@@ -93,12 +110,19 @@ std::vector<ValveRow> ValveTable::rows() const {
 std::optional<ValveRow> ValveTable::row(std::uint32_t serial) const {
   const auto it = rows_.find(serial);
   if (it == rows_.end() || !it->second.present) return std::nullopt;
-  return it->second.row;
+  return shown(it->second.row);
 }
 
 std::vector<GatewaySummary> ValveTable::gateways() const {
   std::vector<GatewaySummary> out;
-  for (const auto& [name, summary] : gateways_) out.push_back(summary);
+  for (const auto& [name, summary] : gateways_) {
+    out.push_back(summary);
+    out.back().lost = !summary.participants.empty() &&
+                      std::all_of(summary.participants.begin(), summary.participants.end(),
+                                  [this](const std::string& participant) {
+                                    return lost_participants_.contains(participant);
+                                  });
+  }
   return out;
 }
 
@@ -111,13 +135,23 @@ std::optional<Reply> ValveTable::reply(std::uint32_t serial, std::string_view su
 }
 
 std::size_t ValveTable::online_count() const {
-  return static_cast<std::size_t>(std::count_if(rows_.begin(), rows_.end(), [](const auto& item) {
-    return item.second.present && item.second.row.online;
-  }));
+  return static_cast<std::size_t>(
+      std::count_if(rows_.begin(), rows_.end(), [this](const auto& item) {
+        return item.second.present && item.second.row.online &&
+               !lost_participants_.contains(item.second.row.participant);
+      }));
+}
+
+std::size_t ValveTable::gateways_expected() const {
+  std::size_t expected = std::max<std::size_t>(gateways_matched_, 1);
+  for (const auto& [name, summary] : gateways_) {
+    expected = std::max<std::size_t>(expected, summary.gateways_seen);
+  }
+  return expected;
 }
 
 bool ValveTable::directory_complete() const {
-  if (gateways_.empty() || gateways_.size() < gateways_matched_) return false;
+  if (gateways_.size() < gateways_expected()) return false;
   for (const auto& [name, summary] : gateways_) {
     // Captured by name: clang before 16 cannot capture a structured binding.
     const auto known =

@@ -21,8 +21,11 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
     failure_ = topic.error();
     return nullptr;
   }
-  // No listener yet: create() attaches them once handlers_ is complete.
-  auto reader = participant_.reader(*topic, dds::topics::state_reader_qos());
+  // No listener yet: create() attaches them once handlers_ is complete. Gateway status follows
+  // its writers' liveliness: a gateway that dies without a word is shown lost.
+  auto reader = participant_.reader(*topic, topic_name == dds::topics::kGatewayStatus
+                                                ? dds::topics::liveliness_reader_qos()
+                                                : dds::topics::state_reader_qos());
   if (!reader) {
     failure_ = Error{reader.error().code, reader.error().reason + " (" + topic_name + ")"};
     return nullptr;
@@ -31,22 +34,23 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
 }
 
 template <class Sample>
-ValveView::Reader ValveView::subscribe(std::function<void(const Sample&)> on_sample) {
+ValveView::Reader ValveView::subscribe(
+    std::function<void(const Sample&, const SampleInfo&)> on_sample) {
   Reader reader =
       reader_of(dds::topics::topic_name<Sample>(), dds::topics::topic_of<Sample>(participant_));
   if (reader == nullptr) return nullptr;
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
     // taking with mutex_ held would invert the lock order against a listener thread.
-    std::vector<Sample> samples;
+    std::vector<std::pair<Sample, SampleInfo>> samples;
     Sample sample;
     SampleInfo info;
     while (from->take_next_sample(&sample, &info) == ReturnCode::RETCODE_OK) {
-      if (info.valid_data) samples.push_back(sample);
+      if (info.valid_data) samples.emplace_back(sample, info);
     }
     if (samples.empty()) return;
     std::lock_guard lock(mutex_);
-    for (const Sample& taken : samples) on_sample(taken);
+    for (const auto& [taken, taken_info] : samples) on_sample(taken, taken_info);
     changed_.notify_all();
   });
   return reader;
@@ -56,18 +60,27 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
   std::unique_ptr<ValveView> view(new ValveView(participant));
   if (view->failure_) return *view->failure_;
   // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
-  // that arrived before a reader had its listener are taken right after.
+  // that arrived before a reader had its listener are taken right after. Gateway status also
+  // tells when a gateway's writers lost their liveliness.
   for (const auto& [reader, handler] : view->handlers_) {
-    reader->set_listener(view.get(), eprosima::fastdds::dds::StatusMask::data_available());
+    const auto mask = reader == view->gateway_status_reader_
+                          ? eprosima::fastdds::dds::StatusMask::data_available()
+                                << eprosima::fastdds::dds::StatusMask::liveliness_changed()
+                          : eprosima::fastdds::dds::StatusMask::data_available();
+    reader->set_listener(view.get(), mask);
   }
   for (const auto& [reader, handler] : view->handlers_) handler(reader);
   return view;
 }
 
 ValveView::ValveView(dds::Participant& participant) : participant_(participant) {
-  subscribe<ValvePresence>([this](const ValvePresence& sample) { table_.on_presence(sample); });
-  gateway_status_reader_ = subscribe<GatewayStatus>(
-      [this](const GatewayStatus& sample) { table_.on_gateway_status(sample); });
+  subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
+    table_.on_presence(sample, dds::participant_of(info.publication_handle));
+  });
+  gateway_status_reader_ =
+      subscribe<GatewayStatus>([this](const GatewayStatus& sample, const SampleInfo& info) {
+        table_.on_gateway_status(sample, dds::participant_of(info.publication_handle));
+      });
   subscribe_telemetry(std::type_identity<dds::TelemetrySample>{});
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
@@ -83,7 +96,7 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
   const auto one = [this](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
-      subscribe<Sample>([this](const Sample& sample) {
+      subscribe<Sample>([this](const Sample& sample, const SampleInfo&) {
         table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
       });
     }
@@ -122,6 +135,18 @@ void ValveView::take_errors(Reader reader) {
 
 void ValveView::on_data_available(DataReader* reader) {
   if (const auto it = handlers_.find(reader); it != handlers_.end()) it->second(reader);
+}
+
+void ValveView::on_liveliness_changed(
+    DataReader* /*reader*/, const eprosima::fastdds::dds::LivelinessChangedStatus& status) {
+  // One writer per gateway on this topic: its participant is the gateway's.
+  const bool back = status.alive_count_change > 0;
+  const bool gone = status.not_alive_count_change > 0 ||
+                    (status.alive_count_change < 0 && status.not_alive_count_change == 0);
+  if (!back && !gone) return;
+  std::lock_guard lock(mutex_);
+  table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle), back);
+  changed_.notify_all();
 }
 
 ValveTable ValveView::snapshot() const {

@@ -32,9 +32,7 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
     if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DROPPED_PARTICIPANT) {
       return;
     }
-    std::ostringstream prefix;
-    prefix << info.info.m_guid.guidPrefix;
-    on_dropped_(prefix.str());
+    on_dropped_(participant_text(info.info.m_guid.guidPrefix));
   }
 
  private:
@@ -129,6 +127,16 @@ void prepare_process() {
 }
 
 }  // namespace
+
+std::string participant_text(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
+  std::ostringstream text;
+  text << prefix;
+  return text.str();
+}
+
+std::string participant_of(const eprosima::fastrtps::rtps::InstanceHandle_t& endpoint) {
+  return participant_text(eprosima::fastrtps::rtps::iHandle2GUID(endpoint).guidPrefix);
+}
 
 Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOptions& options) {
   // Fast DDS 2.9 ends the process (exit(1)) for a domain its port formula cannot map.

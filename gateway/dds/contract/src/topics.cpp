@@ -10,6 +10,11 @@ using namespace eprosima::fastdds::dds;
 namespace {
 
 const eprosima::fastrtps::Duration_t kCommandLease{2, 0};
+// A gateway that dies without a word (SIGKILL, power, a cut cable) loses the liveliness of its
+// state writers 3 s later, and clients show its valves as unknown instead of frozen and online.
+// A reader asking for no liveliness (DDS's default: infinite) still matches.
+const eprosima::fastrtps::Duration_t kStateLease{3, 0};
+const eprosima::fastrtps::Duration_t kStateAnnouncement{1, 0};
 
 // Explicit bounds, so that memory is predictable. Fast DDS's default of 10 instances per topic
 // silently dropped the 11th valve of a bus (and would refuse commands for it); 4096 instances
@@ -60,10 +65,20 @@ constexpr int kFramesHeld = 8192;
 }  // namespace
 
 DataWriterQos state_writer_qos() {
-  return reliable<DataWriterQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 1);
+  auto qos = reliable<DataWriterQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 1);
+  qos.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
+  qos.liveliness().lease_duration = kStateLease;
+  qos.liveliness().announcement_period = kStateAnnouncement;
+  return qos;
 }
 DataReaderQos state_reader_qos() {
   return reliable<DataReaderQos>(TRANSIENT_LOCAL_DURABILITY_QOS, KEEP_LAST_HISTORY_QOS, 1);
+}
+DataReaderQos liveliness_reader_qos() {
+  auto qos = state_reader_qos();
+  qos.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;
+  qos.liveliness().lease_duration = kStateLease;
+  return qos;
 }
 
 DataWriterQos command_writer_qos() {

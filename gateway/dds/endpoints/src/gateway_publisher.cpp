@@ -36,7 +36,8 @@ void write(DataWriter* writer, Sample sample) {
 
 }  // namespace
 
-Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(Participant& participant) {
+Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
+    Participant& participant, const std::string& gateway_name) {
   std::unique_ptr<GatewayPublisher> made(new GatewayPublisher());
   if (auto created = made->telemetry_.create(participant, topics::state_writer_qos()); !created) {
     return created.error();
@@ -47,6 +48,18 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(Participant& 
   if (auto created = made->command_status_.create(participant, topics::status_writer_qos());
       !created) {
     return created.error();
+  }
+  auto peers =
+      PeerGateways::create(participant, gateway_name, made->state_.writer<GatewayStatus>()->guid());
+  if (peers) {
+    made->peers_ = std::move(*peers);
+  } else {
+    // Permissions made before gateways read each other's status: run, and say what is missing.
+    spdlog::warn(
+        "cannot read {} ({}): this gateway counts only itself in gateways_seen, so clients may "
+        "call a valve unknown before they have met every gateway; give the gateway role "
+        "subscribe permission for it (config/security/roles/gateway.xml)",
+        topics::kGatewayStatus, peers.error().reason);
   }
   return made;
 }
@@ -76,7 +89,9 @@ void GatewayPublisher::command_status(const CommandStatus& status) {
 }
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {
-  write(state_.writer<GatewayStatus>(), status);
+  GatewayStatus counted = status;
+  counted.gateways_seen(peers_ ? peers_->count() : 1);
+  write(state_.writer<GatewayStatus>(), counted);
 }
 
 bool GatewayPublisher::wait_for_statuses(Duration timeout) {

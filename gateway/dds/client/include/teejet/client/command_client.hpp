@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <string_view>
 
@@ -34,16 +35,21 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   CommandClient(const CommandClient&) = delete;
   CommandClient& operator=(const CommandClient&) = delete;
 
-  // Waits until `gateways` gateways (at least one) match the status reader, then creates the
-  // command writer and waits until they match it too. Announcing the writer only after the
-  // reader has matched gives the gateway a discovery round-trip to learn of the reader before it
+  // Waits until every gateway in `owners` (their participants, ValveRow::participant: the
+  // gateways that own the valves to command) matches the status reader, then creates the
+  // command writer and waits until each matches it too. Commands are VOLATILE: one written
+  // before its gateway's reader matched would be lost, and a count of matched readers cannot
+  // tell the owner's reader from another gateway's. Announcing the writer only after the reader
+  // has matched gives the gateway a discovery round-trip to learn of the reader before it
   // writes a status (which is TRANSIENT_LOCAL as well, for the half-matched moment left).
-  // With `command_readers` above the gateways, the writer also waits for that many command
+  // With `command_readers` above the owners, the writer also waits for that many command
   // readers (a recorder) until `until`, then sends anyway.
-  // False when not even one gateway matched both by `until` or when interrupted; an Error when
-  // DDS refused the writer.
-  Result<bool> connect(std::size_t gateways, std::size_t command_readers, Deadline until,
-                       const std::atomic<bool>& interrupted);
+  // False when an owner has not matched both by `until` (unmatched() names them) or when
+  // interrupted; an Error when DDS refused the writer.
+  Result<bool> connect(const std::set<std::string>& owners, std::size_t command_readers,
+                       Deadline until, const std::atomic<bool>& interrupted);
+  // The owners that have not matched both the status reader and the command writer.
+  std::set<std::string> unmatched(const std::set<std::string>& owners) const;
 
   // Writes `command` with a fresh command_id and this client's origin; returns the id, or
   // nullopt when the write failed. Requires connect().
@@ -61,15 +67,28 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   const std::string& origin() const { return origin_; }
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+  void on_subscription_matched(
+      eprosima::fastdds::dds::DataReader* reader,
+      const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override;
 
  private:
   CommandClient(dds::Participant& participant, std::string origin);
+  class CommandWriterMatches;
+  bool matched_by(const std::set<std::string>& owners) const;  // match_mutex_ held
 
   dds::Participant& participant_;
   const std::string origin_;
   eprosima::fastdds::dds::DataReader* status_reader_ = nullptr;
   eprosima::fastdds::dds::DataWriter* command_writer_ = nullptr;
   std::uint32_t next_id_;
+  std::unique_ptr<CommandWriterMatches> writer_matches_;
+
+  // The participants of the endpoints matched so far, from the matched callbacks (Fast DDS 2.9
+  // cannot list them: get_matched_publications is unsupported). A multiset: one participant may
+  // have several.
+  mutable std::mutex match_mutex_;
+  std::multiset<std::string> status_writers_;
+  std::multiset<std::string> command_readers_;
 
   std::mutex mutex_;
   std::condition_variable arrived_;

@@ -33,6 +33,12 @@ struct ValveRow {
   bool online = false;
   bool boot_mode = false;
   std::string gateway;
+  // The DDS participant that publishes it (its GUID prefix, "01.0f.…"): the gateway whose
+  // command reader must hear a command to it.
+  std::string participant;
+  // Its gateway vanished (its writers' liveliness lapsed, or it left): what the row says is the
+  // last word, and whether the valve is online is unknown.
+  bool gateway_lost = false;
   std::set<ErrorKind> errors;                           // latched, until Clear Errors
   std::map<std::string, Reply, std::less<>> telemetry;  // by subject, the latest of each
 
@@ -55,29 +61,41 @@ struct GatewaySummary {
   std::uint16_t tx_errors = 0;  // the CAN controller's error counters
   std::uint16_t rx_errors = 0;
   std::uint64_t rx_dropped = 0;
+  std::uint32_t gateways_seen = 0;  // on the domain by its own count, itself included
+  // The participants publishing status under this name: more than one is two gateways
+  // sharing a name.
+  std::set<std::string> participants;
+  bool lost = false;  // every participant under this name vanished
 };
 
 class ValveTable {
  public:
-  void on_presence(const ValvePresence& presence);
+  // `participant` is the publishing participant's GUID prefix (dds::participant_of).
+  void on_presence(const ValvePresence& presence, const std::string& participant = {});
   // Any telemetry message, kept as the latest of its subject.
   void on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                     std::uint64_t received_ns);
   void on_error(std::uint32_t serial, ErrorKind kind);
   void on_error_cleared(std::uint32_t serial, ErrorKind kind);
-  void on_gateway_status(const GatewayStatus& status);
+  void on_gateway_status(const GatewayStatus& status, const std::string& participant = {});
+  // A gateway's participant whose writers lost their liveliness or left (alive false), or came
+  // back (true).
+  void on_participant_liveliness(const std::string& participant, bool alive);
 
   // Valves with a presence sample, by serial.
   std::vector<ValveRow> rows() const;
   std::optional<ValveRow> row(std::uint32_t serial) const;
   std::vector<GatewaySummary> gateways() const;  // by name
   std::optional<Reply> reply(std::uint32_t serial, std::string_view subject) const;
-  std::size_t online_count() const;
+  std::size_t online_count() const;  // online and with a gateway alive
 
   // How many gateways discovery has found so far (writers of gateway status matched).
   void set_gateways_matched(std::size_t count) { gateways_matched_ = count; }
 
-  // Whether the directory is all here: every gateway found (at least one) has reported its
+  // How many gateways there are to meet: the most that discovery has matched or that any
+  // gateway met says it hears on the domain (gateways_seen).
+  std::size_t gateways_expected() const;
+  // Whether the directory is all here: every gateway expected (at least one) has reported its
   // status, and each has published presence for as many valves as it says it knows. Presence
   // and gateway status are durable, so this holds shortly after discovery.
   bool directory_complete() const;
@@ -92,10 +110,12 @@ class ValveTable {
     bool present = false;
   };
   Entry& entry(std::uint32_t serial);
+  ValveRow shown(const ValveRow& row) const;  // with gateway_lost filled in
 
   std::map<std::uint32_t, Entry> rows_;
   std::map<std::string, GatewaySummary> gateways_;
   std::size_t gateways_matched_ = 0;
+  std::set<std::string> lost_participants_;
 };
 
 }  // namespace teejet::client

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <functional>
 #include <map>
 #include <memory>
@@ -44,6 +45,11 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
                   const std::atomic<bool>& interrupted) const;
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
+  // Gateway status only: a gateway whose writers lost their liveliness (it died without a word)
+  // or left is marked lost in the table.
+  void on_liveliness_changed(
+      eprosima::fastdds::dds::DataReader* reader,
+      const eprosima::fastdds::dds::LivelinessChangedStatus& status) override;
 
  private:
   using Reader = eprosima::fastdds::dds::DataReader*;
@@ -51,7 +57,8 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   explicit ValveView(dds::Participant& participant);
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
-  Reader subscribe(std::function<void(const Sample&)> on_sample);
+  Reader subscribe(
+      std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample);
   Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
   template <class... Samples>
   void subscribe_telemetry(std::type_identity<std::variant<Samples...>>);

@@ -56,6 +56,11 @@ inline eprosima::fastrtps::Time_t to_dds_time(std::uint64_t unix_ns) {
           static_cast<std::uint32_t>(unix_ns % kSecond)};
 }
 
+// The participant an endpoint belongs to, as its GUID prefix ("01.0f.…"): of a sample's
+// publication_handle or a matched reader or writer. A gateway's writers and readers all share it.
+std::string participant_of(const eprosima::fastrtps::rtps::InstanceHandle_t& endpoint);
+std::string participant_text(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix);
+
 class Participant {
  public:
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);

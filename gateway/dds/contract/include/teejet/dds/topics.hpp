@@ -25,6 +25,9 @@ inline constexpr const char* kBusFrame = "teejet/can/frame";
 // Telemetry: "teejet/valve/" and the subject of the message the sample carries (the codec's
 // name of what its request asks for: position, current, cycle_counts, baud_rate, ...).
 inline constexpr std::string_view kTelemetryPrefix = "teejet/valve/";
+// A gateway's name is the key of its status (@key string<64>): a longer one would be cut when
+// published, and two long names with a common start would become one gateway.
+inline constexpr std::size_t kMaxGatewayNameLength = 64;
 
 namespace detail {
 
@@ -75,6 +78,10 @@ using EverySampleType = decltype(every_sample_type(std::type_identity<TelemetryS
 // BEST_EFFORT or VOLATILE reader still matches.
 eprosima::fastdds::dds::DataWriterQos state_writer_qos();
 eprosima::fastdds::dds::DataReaderQos state_reader_qos();
+// state_reader_qos() that also follows its writers' liveliness (3 s, as the state writers offer):
+// Fast DDS watches a writer's liveliness only for a reader that asks for a finite lease. A
+// writer offering none (another vendor's, an older gateway) does not match it.
+eprosima::fastdds::dds::DataReaderQos liveliness_reader_qos();
 
 // Commands: RELIABLE, VOLATILE, KEEP_ALL (up to 256 queued per valve, writers heartbeat every
 // 100 ms so acknowledgements free them promptly), so no command is lost;

@@ -10,6 +10,7 @@
 
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/peer_gateways.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::dds {
@@ -54,7 +55,10 @@ class SampleWriters<std::variant<Samples...>> {
 
 class GatewayPublisher final : public bridge::Sink {
  public:
-  static Result<std::unique_ptr<GatewayPublisher>> create(Participant& participant);
+  // `gateway_name` is the one its statuses carry: the other gateways it hears are counted
+  // against it (gateways_seen).
+  static Result<std::unique_ptr<GatewayPublisher>> create(Participant& participant,
+                                                          const std::string& gateway_name);
 
   void presence(const ValvePresence& sample) override;
   void telemetry(const TelemetrySample& sample) override;
@@ -74,6 +78,7 @@ class GatewayPublisher final : public bridge::Sink {
   SampleWriters<TelemetrySample> telemetry_;
   SampleWriters<StateSample> state_;
   SampleWriters<std::variant<CommandStatus>> command_status_;
+  std::unique_ptr<PeerGateways> peers_;
 };
 
 }  // namespace teejet::dds
