@@ -130,7 +130,8 @@ json fields(const teejet::GatewayStatus& s) {
           {"rx_dropped", u64(s.rx_dropped())},
           {"valves_online", s.valves_online()},
           {"valves_known", s.valves_known()},
-          {"stamp_ns", u64(s.stamp_ns())}};
+          {"stamp_ns", u64(s.stamp_ns())},
+          {"gateways_seen", s.gateways_seen()}};
 }
 json fields(const teejet::BusFrame& s) {
   return {{"gateway", s.gateway().to_string()},

@@ -49,13 +49,14 @@ TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
        {{"speed_percent", 80}, {"direction", "open"}, {"opening_direction", "clockwise"}}},
   };
   const json expected = {
-      {"serial", "TJV000001"}, {"address", 217},
-      {"online", true},        {"boot_mode", false},
-      {"position", 45.3},      {"temperature_c", 25},
-      {"volts", 12.1},         {"errors", json::array({"high_current"})},
-      {"gateway", "gw"},       {"target", 90.0},
-      {"amps", 0.35},          {"speed_percent", 80},
-      {"direction", "open"},   {"telemetry", telemetry},
+      {"serial", "TJV000001"},  {"address", 217},
+      {"online", true},         {"boot_mode", false},
+      {"position", 45.3},       {"temperature_c", 25},
+      {"volts", 12.1},          {"errors", json::array({"high_current"})},
+      {"gateway", "gw"},        {"gateway_lost", false},
+      {"target", 90.0},         {"amps", 0.35},
+      {"speed_percent", 80},    {"direction", "open"},
+      {"telemetry", telemetry},
   };
   EXPECT_EQ(valves_json(table, {{1, 90.0}}), json::array({expected}));
 }
@@ -81,8 +82,8 @@ TEST(WebGateways, HealthHasBusStateErrorCountersFramesAndDrops) {
   ASSERT_EQ(table.gateways().size(), 1u);
   EXPECT_EQ(gateway_json(table.gateways().at(0)).dump(),
             R"({"bus_state":"error_warning","can_interface":"can0","decode_errors":2,)"
-            R"("frames_in":1200,"frames_out":340,"gateway":"bench","rx_dropped":5,"rx_errors":3,)"
-            R"("tx_errors":97,"valves_known":3,"valves_online":2})");
+            R"("frames_in":1200,"frames_out":340,"gateway":"bench","lost":false,"rx_dropped":5,)"
+            R"("rx_errors":3,"tx_errors":97,"valves_known":3,"valves_online":2})");
 }
 
 TEST(WebUpdates, TheSnapshotHoldsEverythingAndAQuietTickSendsNothing) {

@@ -112,7 +112,9 @@ void Gateway::stop() {
     }
   }
   // The publishers' writers go with the participant; the bridge writes through them, and the
-  // bus through frames_ (nothing sends or takes frames any more).
+  // bus through frames_ (nothing sends or takes frames any more). The peers' reader goes first:
+  // its listener is the publisher.
+  if (publisher_) publisher_->stop_hearing_peers();
   participant_.reset();
   bridge_.reset();
   publisher_.reset();

@@ -71,6 +71,10 @@ class GatewayPublisher final : public bridge::Sink {
   // were acknowledged.
   bool wait_for_statuses(Duration timeout);
 
+  // Deletes the reader of the other gateways' status, whose listener this is: before the
+  // participant goes (the writers may go with it).
+  void stop_hearing_peers() { peers_.reset(); }
+
  private:
   GatewayPublisher() = default;
 
