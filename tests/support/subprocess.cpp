@@ -211,4 +211,10 @@ Finished run(const std::vector<std::string>& argv, std::chrono::milliseconds lim
   return Subprocess(argv).wait(limit);
 }
 
+std::string describe(const Finished& finished) {
+  return "exit " + std::to_string(finished.exit_code) + " after " +
+         std::to_string(finished.took.count()) + " ms\n--- stdout\n" + finished.out +
+         "--- stderr\n" + finished.err;
+}
+
 }  // namespace teejet::testing

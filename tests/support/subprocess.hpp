@@ -74,6 +74,9 @@ class Subprocess {
   Finished finished_;
 };
 
+// Exit code, time taken and both outputs, for a failed expectation's message.
+std::string describe(const Finished& finished);
+
 // Starts and waits in one go.
 Finished run(const std::vector<std::string>& argv,
              std::chrono::milliseconds limit = std::chrono::seconds(30));

@@ -55,12 +55,6 @@ std::vector<std::string> split_lines(const std::string& text) {
   return lines;
 }
 
-std::string describe(const Finished& finished) {
-  return "exit " + std::to_string(finished.exit_code) + " after " +
-         std::to_string(finished.took.count()) + " ms\n--- stdout\n" + finished.out +
-         "--- stderr\n" + finished.err;
-}
-
 class ValvectlEndToEnd : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

@@ -34,12 +34,6 @@ std::uint32_t serial_of(int gateway, int valve) {
   return static_cast<std::uint32_t>(gateway * 100000 + valve);
 }
 
-std::string describe(const Finished& finished) {
-  return "exit " + std::to_string(finished.exit_code) + " after " +
-         std::to_string(finished.took.count()) + " ms\n--- stdout\n" + finished.out +
-         "--- stderr\n" + finished.err;
-}
-
 class SeveralGateways : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -65,9 +59,13 @@ class SeveralGateways : public ::testing::Test {
         "warn"});
   }
 
-  static Finished valvectl(std::vector<std::string> args) {
+  // valvectl on the gateways' domain, then `args`.
+  static std::vector<std::string> valvectl_argv(std::vector<std::string> args) {
     args.insert(args.begin(), {VALVECTL_PATH, "--domain", std::to_string(test_domain())});
-    return run(args, kValvectlLimit);
+    return args;
+  }
+  static Finished valvectl(std::vector<std::string> args) {
+    return run(valvectl_argv(std::move(args)), kValvectlLimit);
   }
 
   static std::unique_ptr<ScratchDir> scratch_;
@@ -108,9 +106,9 @@ TEST_F(SeveralGateways, MovesStartedAtOnceEachEndWithOneFinalStatus) {
   std::vector<std::unique_ptr<Subprocess>> movers;
   for (int gateway = 1; gateway <= kGateways; ++gateway) {
     for (const int valve : {3, 4}) {
-      movers.push_back(std::make_unique<Subprocess>(std::vector<std::string>{
-          VALVECTL_PATH, "--domain", std::to_string(test_domain()), "--timeout", "30", "move",
-          codec::format_serial(serial_of(gateway, valve)), "--to", "45", "--wait"}));
+      movers.push_back(std::make_unique<Subprocess>(
+          valvectl_argv({"--timeout", "30", "move", codec::format_serial(serial_of(gateway, valve)),
+                         "--to", "45", "--wait"})));
     }
   }
   for (auto& mover : movers) {
@@ -142,12 +140,10 @@ TEST_F(SeveralGateways, ASecondGatewayWithTheSameNameIsReportedByBoth) {
 // Last: it kills rig-4. A gateway SIGKILLed (a crash, a cut cable) used to look alive for good:
 // every valve online, frozen where it was. Its state writers' liveliness lapses 3 s after.
 TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknown) {
-  Subprocess watch({VALVECTL_PATH, "--domain", std::to_string(test_domain()), "--json", "watch",
-                    "--interval", "200"});
+  Subprocess watch(valvectl_argv({"--json", "watch", "--interval", "200"}));
   const auto watched = serial_of(4, 1);
   ASSERT_TRUE(watch.wait_for_stdout("\"serial\":\"" + codec::format_serial(watched) + "\"", 30s))
       << watch.out() << watch.err();
-  const auto frames_before = count_of(watch.out(), "\n");
   gateways_[3]->signal(SIGKILL);
   // The last whole frame (a line) that says so: rig-4's four valves unknown and not online, the
   // others as before.
@@ -155,9 +151,9 @@ TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknow
     const std::string& out = watch.out();
     const auto end = out.rfind('\n');
     if (end == std::string::npos) return std::nullopt;
-    const auto start = out.rfind('\n', end - 1);
-    std::string line = out.substr(start == std::string::npos ? 0 : start + 1,
-                                  end - (start == std::string::npos ? 0 : start + 1));
+    const auto before = out.rfind('\n', end - 1);
+    const auto begin = before == std::string::npos ? 0 : before + 1;
+    std::string line = out.substr(begin, end - begin);
     if (!contains(line, "\"gateway_lost\":true")) return std::nullopt;
     return line;
   };
@@ -170,7 +166,6 @@ TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknow
   EXPECT_EQ(count_of(*last, "\"gateway_lost\":true"), 4u) << *last;
   EXPECT_EQ(count_of(*last, "\"gateway_lost\":false"), 12u) << *last;
   EXPECT_EQ(count_of(*last, "\"online\":true"), 12u) << *last;
-  EXPECT_GT(count_of(watch.out(), "\n"), frames_before);
   watch.signal(SIGINT);
   EXPECT_EQ(watch.wait(watch.elapsed() + 10000ms).exit_code, kExitOk);
 }

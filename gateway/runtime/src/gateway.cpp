@@ -113,7 +113,7 @@ void Gateway::stop() {
   }
   // The publishers' writers go with the participant; the bridge writes through them, and the
   // bus through frames_ (nothing sends or takes frames any more). The peers' reader goes first:
-  // its listener is the publisher.
+  // the publisher deletes it through the participant.
   if (publisher_) publisher_->stop_hearing_peers();
   participant_.reset();
   bridge_.reset();

@@ -2,7 +2,6 @@
 
 #include <unistd.h>
 
-#include <algorithm>
 #include <array>
 #include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
@@ -114,34 +113,28 @@ CommandClient::~CommandClient() {
   participant_.delete_writer(command_writer_);
 }
 
-bool CommandClient::matched_by(const std::set<std::string>& owners) const {
-  return std::all_of(owners.begin(), owners.end(), [this](const std::string& owner) {
-    return status_writers_.contains(owner) && command_readers_.contains(owner);
-  });
-}
-
-std::set<std::string> CommandClient::unmatched(const std::set<std::string>& owners) const {
+std::set<std::string> CommandClient::missing(const std::set<std::string>& owners,
+                                             bool command_writer_too) const {
   std::lock_guard lock(match_mutex_);
   std::set<std::string> missing;
   for (const auto& owner : owners) {
-    if (!status_writers_.contains(owner) || !command_readers_.contains(owner)) {
+    if (!status_writers_.contains(owner) ||
+        (command_writer_too && !command_readers_.contains(owner))) {
       missing.insert(owner);
     }
   }
   return missing;
 }
 
+std::set<std::string> CommandClient::unmatched(const std::set<std::string>& owners) const {
+  return missing(owners, /*command_writer_too=*/true);
+}
+
 Result<bool> CommandClient::connect(const std::set<std::string>& owners,
                                     std::size_t command_readers, Deadline until,
                                     const std::atomic<bool>& interrupted) {
   const bool reader_matched = wait_for(
-      [&] {
-        std::lock_guard lock(match_mutex_);
-        return std::all_of(owners.begin(), owners.end(), [this](const std::string& owner) {
-          return status_writers_.contains(owner);
-        });
-      },
-      until, interrupted);
+      [&] { return missing(owners, /*command_writer_too=*/false).empty(); }, until, interrupted);
   if (!reader_matched) return false;
   if (command_writer_ == nullptr) {
     auto topic = participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand);
@@ -158,12 +151,7 @@ Result<bool> CommandClient::connect(const std::set<std::string>& owners,
     }
     command_writer_ = *writer;
   }
-  const bool matched = wait_for(
-      [&] {
-        std::lock_guard lock(match_mutex_);
-        return matched_by(owners);
-      },
-      until, interrupted);
+  const bool matched = wait_for([&] { return unmatched(owners).empty(); }, until, interrupted);
   if (!matched) return false;
   // Readers beyond the owners (a recorder) are waited for until `until`, then the commands go.
   const auto readers = [this] {

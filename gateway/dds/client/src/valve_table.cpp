@@ -93,9 +93,13 @@ void ValveTable::on_participant_liveliness(const std::string& participant, bool 
   }
 }
 
+bool ValveTable::lost(const std::string& participant) const {
+  return !participant.empty() && lost_participants_.contains(participant);
+}
+
 ValveRow ValveTable::shown(const ValveRow& row) const {
   ValveRow copy = row;
-  copy.gateway_lost = !row.participant.empty() && lost_participants_.contains(row.participant);
+  copy.gateway_lost = lost(row.participant);
   return copy;
 }
 
@@ -117,11 +121,10 @@ std::vector<GatewaySummary> ValveTable::gateways() const {
   std::vector<GatewaySummary> out;
   for (const auto& [name, summary] : gateways_) {
     out.push_back(summary);
-    out.back().lost = !summary.participants.empty() &&
-                      std::all_of(summary.participants.begin(), summary.participants.end(),
-                                  [this](const std::string& participant) {
-                                    return lost_participants_.contains(participant);
-                                  });
+    out.back().lost =
+        !summary.participants.empty() &&
+        std::all_of(summary.participants.begin(), summary.participants.end(),
+                    [this](const std::string& participant) { return lost(participant); });
   }
   return out;
 }
@@ -137,8 +140,7 @@ std::optional<Reply> ValveTable::reply(std::uint32_t serial, std::string_view su
 std::size_t ValveTable::online_count() const {
   return static_cast<std::size_t>(
       std::count_if(rows_.begin(), rows_.end(), [this](const auto& item) {
-        return item.second.present && item.second.row.online &&
-               !lost_participants_.contains(item.second.row.participant);
+        return item.second.present && item.second.row.online && !lost(item.second.row.participant);
       }));
 }
 

@@ -41,11 +41,6 @@ std::uint32_t PeerGateways::count() const {
   return static_cast<std::uint32_t>(names.size());
 }
 
-std::set<GuidPrefix_t> PeerGateways::namesakes() const {
-  std::lock_guard lock(mutex_);
-  return namesakes_;
-}
-
 void PeerGateways::on_data_available(DataReader* reader) {
   // Taken before locking: Fast DDS holds the reader's lock while it calls the listener.
   std::vector<std::pair<GatewayStatus, SampleInfo>> taken;

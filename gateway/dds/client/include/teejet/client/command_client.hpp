@@ -74,7 +74,8 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
  private:
   CommandClient(dds::Participant& participant, std::string origin);
   class CommandWriterMatches;
-  bool matched_by(const std::set<std::string>& owners) const;  // match_mutex_ held
+  // The owners not yet matched by the status reader and, `command_writer_too`, the writer.
+  std::set<std::string> missing(const std::set<std::string>& owners, bool command_writer_too) const;
 
   dds::Participant& participant_;
   const std::string origin_;

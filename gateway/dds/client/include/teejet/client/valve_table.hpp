@@ -110,7 +110,8 @@ class ValveTable {
     bool present = false;
   };
   Entry& entry(std::uint32_t serial);
-  ValveRow shown(const ValveRow& row) const;  // with gateway_lost filled in
+  bool lost(const std::string& participant) const;  // its writers lapsed or left
+  ValveRow shown(const ValveRow& row) const;        // with gateway_lost filled in
 
   std::map<std::uint32_t, Entry> rows_;
   std::map<std::string, GatewaySummary> gateways_;

@@ -71,8 +71,8 @@ class GatewayPublisher final : public bridge::Sink {
   // were acknowledged.
   bool wait_for_statuses(Duration timeout);
 
-  // Deletes the reader of the other gateways' status, whose listener this is: before the
-  // participant goes (the writers may go with it).
+  // Deletes the reader of the other gateways' status. Call it before the participant goes,
+  // which deletes the writers by itself but cannot be asked to delete a reader afterwards.
   void stop_hearing_peers() { peers_.reset(); }
 
  private:

@@ -33,8 +33,6 @@ class PeerGateways final : public eprosima::fastdds::dds::DataReaderListener {
 
   // Gateways whose status instance is alive, this one included: at least 1.
   std::uint32_t count() const;
-  // Participants other than this one that published a status under this gateway's name.
-  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> namesakes() const;
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
 
@@ -49,7 +47,7 @@ class PeerGateways final : public eprosima::fastdds::dds::DataReaderListener {
 
   mutable std::mutex mutex_;
   std::map<eprosima::fastrtps::rtps::InstanceHandle_t, std::string> alive_;  // by instance
-  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> namesakes_;
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> namesakes_;               // each logged once
 };
 
 }  // namespace teejet::dds
