@@ -203,19 +203,54 @@ TEST_F(GatewayEndpointsTest, EveryTelemetryTypeReachesItsTopicWithTheCanReceiveT
   count.serial(4711);
   count.count(99);
   count.received_ns(1'700'000'000'000'000'001);
-  ASSERT_TRUE(eventually(
-      [&] {
-        publisher->telemetry(sample);
-        publisher->telemetry(count);
-        return position->get_unread_count() > 0 && cycles->get_unread_count() > 0;
-      },
-      kDeadline));
+  // Written once: a late joiner gets it (state QoS), and a second write of the same stamp would
+  // go out 1 ns later (SourceStamps).
+  publisher->telemetry(sample);
+  publisher->telemetry(count);
+  ASSERT_TRUE(
+      eventually([&] { return position->get_unread_count() > 0 && cycles->get_unread_count() > 0; },
+                 kDeadline));
   auto positions = take_all<ValvePosition>(position);
   ASSERT_FALSE(positions.empty());
   EXPECT_FLOAT_EQ(positions[0].first.degrees(), 42.5f);
   EXPECT_EQ(positions[0].second.source_timestamp.seconds(), 1'700'000'000);
   EXPECT_EQ(positions[0].second.source_timestamp.nanosec(), 123'456'789u);
   EXPECT_EQ(take_all<ValveCycleCounts>(cycles).at(0).first.count(), 99u);
+}
+
+// A presence carries its valve's last I'm Here, which can be earlier than the sample before it
+// (a valve that went offline): its source timestamp is then 1 ns after that sample's, never
+// earlier (source_order_tests.cpp shows the abort it prevents), and last_seen_ns stays exact.
+TEST_F(GatewayEndpointsTest, AStampEarlierThanTheWritersLastGoesOutJustAfterIt) {
+  DdsPeer ecu(test_domain(), "ecu");
+  auto* reader = ecu.reader<ValvePresence>();
+  ASSERT_NE(reader, nullptr);
+  constexpr std::uint64_t kBase = 1'700'000'000'000'000'000;
+  auto heard = [](std::uint32_t serial, std::uint64_t last_seen_ns, bool online) {
+    auto sample = presence(serial, static_cast<std::uint8_t>(0xD7 + serial));
+    sample.last_seen_ns(last_seen_ns);
+    sample.online(online);
+    return sample;
+  };
+  publisher->presence(heard(1, kBase + 500, true));
+  publisher->presence(heard(2, kBase + 100, false));
+  publisher->presence(heard(3, kBase + 900, true));
+  std::map<std::uint32_t, std::pair<std::uint64_t, std::uint64_t>> stamps;  // source, last seen
+  ASSERT_TRUE(eventually(
+      [&] {
+        for (auto& [sample, info] : take_all<ValvePresence>(reader)) {
+          stamps[sample.serial()] = {
+              std::uint64_t(info.source_timestamp.seconds()) * 1'000'000'000 +
+                  info.source_timestamp.nanosec(),
+              sample.last_seen_ns()};
+        }
+        return stamps.size() == 3;
+      },
+      kDeadline));
+  using Stamps = std::pair<std::uint64_t, std::uint64_t>;
+  EXPECT_EQ(stamps[1], (Stamps{kBase + 500, kBase + 500}));
+  EXPECT_EQ(stamps[2], (Stamps{kBase + 501, kBase + 100}));
+  EXPECT_EQ(stamps[3], (Stamps{kBase + 900, kBase + 900}));
 }
 
 TEST_F(GatewayEndpointsTest, ClearedErrorsAreDisposed) {

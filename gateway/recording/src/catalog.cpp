@@ -11,6 +11,7 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/source_stamps.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::recording {
@@ -123,7 +124,10 @@ class TypedWriter final : public TopicWriter {
   Status write(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    const auto code = writer_->write_w_timestamp(&sample, HANDLE_NIL, dds::to_dds_time(source_ns));
+    // A replay of several gateways' samples goes back in time from one to the next.
+    const auto code = stamps_.write(source_ns, [&](const auto& stamp) {
+      return writer_->write_w_timestamp(&sample, HANDLE_NIL, stamp);
+    });
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("write refused", code);
     return {};
   }
@@ -131,8 +135,9 @@ class TypedWriter final : public TopicWriter {
   Status dispose(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    const auto code =
-        writer_->dispose_w_timestamp(&sample, HANDLE_NIL, dds::to_dds_time(source_ns));
+    const auto code = stamps_.write(source_ns, [&](const auto& stamp) {
+      return writer_->dispose_w_timestamp(&sample, HANDLE_NIL, stamp);
+    });
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("dispose refused", code);
     return {};
   }
@@ -167,6 +172,7 @@ class TypedWriter final : public TopicWriter {
   }
 
   DataWriter* writer_;
+  dds::SourceStamps stamps_;
   typename PubSubTypeOf<Sample>::type type_;
 };
 

@@ -175,7 +175,11 @@ std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
   if (next_id_ == 0) next_id_ = 1;
   command.command_id(id);
   command.origin(origin_);
-  if (command_writer_ == nullptr || !command_writer_->write(&command)) return std::nullopt;
+  if (command_writer_ == nullptr) return std::nullopt;
+  const auto written = command_stamps_.write_now([&](const auto& stamp) {
+    return command_writer_->write_w_timestamp(&command, eprosima::fastdds::dds::HANDLE_NIL, stamp);
+  });
+  if (written != ReturnCode::RETCODE_OK) return std::nullopt;
   return id;
 }
 

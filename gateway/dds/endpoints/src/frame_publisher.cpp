@@ -33,8 +33,9 @@ void FramePublisher::on_frame(const codec::CanFrame& frame, can::FrameDirection 
       frame, gateway_, can_interface_,
       direction == can::FrameDirection::kSent ? FRAME_SENT : FRAME_RECEIVED,
       unix_nanoseconds(stamp));
-  const auto result =
-      writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, to_dds_time(sample.stamp_ns()));
+  const auto result = stamps_.write(sample.stamp_ns(), [&](const auto& source_stamp) {
+    return writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, source_stamp);
+  });
   if (result == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) return;
   // Best effort loses frames under load by design; a write that fails says something is wrong
   // with the writer itself. Once, then every thousandth, so that a full bus never floods the log.

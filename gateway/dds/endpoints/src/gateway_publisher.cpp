@@ -13,25 +13,14 @@ using namespace eprosima::fastdds::dds;
 namespace {
 
 // A failed write loses a sample that consumers expect: say so, without flooding the log.
-void report(DataWriter* writer, const ReturnCode_t& result) {
+void report(const std::string& topic, const ReturnCode_t& result) {
   if (result == ReturnCode_t::RETCODE_OK) return;
   static std::atomic<std::uint64_t> failures{0};
   const auto count = ++failures;
   if (count == 1 || count % 1000 == 0) {
-    spdlog::error("DDS write on {} failed (code {}); {} failed write(s) so far",
-                  writer->get_topic()->get_name(), result(), count);
+    spdlog::error("DDS write on {} failed (code {}); {} failed write(s) so far", topic, result(),
+                  count);
   }
-}
-
-// Samples carry the CAN receive time as their DDS source timestamp too.
-template <class Sample>
-void write_stamped(DataWriter* writer, Sample sample, std::uint64_t stamp_ns) {
-  report(writer, writer->write_w_timestamp(&sample, HANDLE_NIL, to_dds_time(stamp_ns)));
-}
-
-template <class Sample>
-void write(DataWriter* writer, Sample sample) {
-  report(writer, writer->write(&sample) ? ReturnCode_t::RETCODE_OK : ReturnCode_t::RETCODE_ERROR);
 }
 
 }  // namespace
@@ -65,33 +54,33 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
 }
 
 void GatewayPublisher::presence(const ValvePresence& sample) {
-  write_stamped(state_.writer<ValvePresence>(), sample, sample.last_seen_ns());
+  report(topics::kPresence, state_.write(sample, sample.last_seen_ns()));
 }
 
 void GatewayPublisher::telemetry(const TelemetrySample& sample) {
   std::visit(
       [this](const auto& s) {
-        write_stamped(telemetry_.writer<std::decay_t<decltype(s)>>(), s, s.received_ns());
+        report(topics::topic_name<std::decay_t<decltype(s)>>(),
+               telemetry_.write(s, s.received_ns()));
       },
       sample);
 }
 
 void GatewayPublisher::error_cleared(std::uint32_t serial, ErrorKind kind) {
-  DataWriter* writer = telemetry_.writer<ValveError>();
   ValveError key;
   key.serial(serial);
   key.kind(kind);
-  report(writer, writer->dispose(&key, HANDLE_NIL));
+  report(topics::kError, telemetry_.dispose(key));
 }
 
 void GatewayPublisher::command_status(const CommandStatus& status) {
-  write(command_status_.writer<CommandStatus>(), status);
+  report(topics::kCommandStatus, command_status_.write(status, 0));
 }
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {
   GatewayStatus counted = status;
   counted.gateways_seen(peers_ ? peers_->count() : 1);
-  write(state_.writer<GatewayStatus>(), counted);
+  report(topics::kGatewayStatus, state_.write(counted, 0));
 }
 
 bool GatewayPublisher::wait_for_statuses(Duration timeout) {

@@ -20,6 +20,7 @@
 
 #include "teejet/client/valve_view.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/source_stamps.hpp"
 
 namespace teejet::client {
 
@@ -81,6 +82,7 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
   const std::string origin_;
   eprosima::fastdds::dds::DataReader* status_reader_ = nullptr;
   eprosima::fastdds::dds::DataWriter* command_writer_ = nullptr;
+  dds::SourceStamps command_stamps_;
   std::uint32_t next_id_;
   std::unique_ptr<CommandWriterMatches> writer_matches_;
 

@@ -11,6 +11,7 @@
 
 #include "teejet/can/observed_bus.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/source_stamps.hpp"
 
 namespace teejet::dds {
 
@@ -32,6 +33,7 @@ class FramePublisher final : public can::FrameObserver {
                  std::string can_interface);
 
   eprosima::fastdds::dds::DataWriter* const writer_;
+  SourceStamps stamps_;
   const std::string gateway_;
   const std::string can_interface_;
 };

@@ -1,7 +1,9 @@
 #pragma once
 
-// The gateway's writers: the Sink the bridge publishes through. Every sample carries the CAN
-// receive time as its DDS source timestamp too.
+// The gateway's writers: the Sink the bridge publishes through. A telemetry sample carries the
+// CAN receive time as its DDS source timestamp too, a presence its valve's last I'm Here, the
+// others the time they were written; never earlier than the writer's previous sample
+// (SourceStamps says why).
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <memory>
@@ -11,6 +13,7 @@
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/peer_gateways.hpp"
+#include "teejet/dds/source_stamps.hpp"
 #include "teejet/dds/topics.hpp"
 
 namespace teejet::dds {
@@ -34,10 +37,33 @@ class SampleWriters<std::variant<Samples...>> {
     return std::get<Slot<Sample>>(writers_).writer;
   }
 
+  // Writes `sample` stamped `stamp_ns` (Unix nanoseconds; 0: now), or 1 ns after the writer's
+  // previous sample when that would go back.
+  template <class Sample>
+  eprosima::fastrtps::types::ReturnCode_t write(const Sample& sample, std::uint64_t stamp_ns) {
+    auto& slot = std::get<Slot<Sample>>(writers_);
+    const auto with = [&](const eprosima::fastrtps::Time_t& stamp) {
+      return slot.writer->write_w_timestamp(const_cast<Sample*>(&sample),
+                                            eprosima::fastdds::dds::HANDLE_NIL, stamp);
+    };
+    return stamp_ns == 0 ? slot.stamps->write_now(with) : slot.stamps->write(stamp_ns, with);
+  }
+
+  // Disposes the instance of `key`, stamped now on the same terms.
+  template <class Sample>
+  eprosima::fastrtps::types::ReturnCode_t dispose(const Sample& key) {
+    auto& slot = std::get<Slot<Sample>>(writers_);
+    return slot.stamps->write_now([&](const eprosima::fastrtps::Time_t& stamp) {
+      return slot.writer->dispose_w_timestamp(const_cast<Sample*>(&key),
+                                              eprosima::fastdds::dds::HANDLE_NIL, stamp);
+    });
+  }
+
  private:
   template <class Sample>
   struct Slot {
     eprosima::fastdds::dds::DataWriter* writer = nullptr;
+    std::unique_ptr<SourceStamps> stamps = std::make_unique<SourceStamps>();
   };
 
   template <class Sample>
