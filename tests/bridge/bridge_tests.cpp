@@ -531,6 +531,25 @@ TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
   EXPECT_EQ(sink.gateway_statuses()[1].stamp_ns(), unix_nanoseconds(kStart + 2s));
 }
 
+// The thread that takes commands keeps their deadlines but never calls a valve offline: only
+// the bus reader may, once it took what the bus holds (on a starved machine the I'm Here can
+// be waiting there: a command to that valve was REJECTED "offline" in a flood under ASan).
+TEST_F(BridgeTest, TheCommandThreadsTickEndsCommandsButLeavesValvesToTheBusReader) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 9, kStart);
+  auto jog = from(kEcu, 12, command(9, COMMAND_MILLISECONDS_TO_RUN));
+  jog.milliseconds(1500);
+  command_at(bridge, kStart + 1s, jog);
+  EXPECT_LE(bridge.next_command_deadline(), clock->steady() + 1500ms);
+
+  at(kStart + 4s);  // past both deadlines: the jog's end and the valve's 3 s of silence
+  bridge.tick_commands();
+  EXPECT_EQ(sink.states_of(12), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_TRUE(sink.presences().back().online());
+  bridge.tick();
+  EXPECT_FALSE(sink.presences().back().online());
+}
+
 // Issue 7, bug 7: an NTP or GPS step of the wall clock at boot took every valve offline (or
 // stretched every deadline), because deadlines ran on the wall clock.
 TEST_F(BridgeTest, AWallClockStepNeitherTakesValvesOfflineNorMovesDeadlines) {

@@ -348,8 +348,9 @@ TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
     EXPECT_TRUE(ecu.write(from("ecu", id, move_to(2, degrees))));
     EXPECT_TRUE(ecu.first("ecu", id, 15s));
     const auto latency = std::chrono::steady_clock::now() - sent;
-    EXPECT_EQ(Peer::states(ecu.follow("ecu", id)),
-              (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+    const auto statuses = ecu.follow("ecu", id);
+    EXPECT_EQ(Peer::states(statuses), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}))
+        << "last reason: " << (statuses.empty() ? "none" : statuses.back().reason());
     return std::chrono::duration<double, std::milli>(latency).count();
   };
   std::vector<double> idle;

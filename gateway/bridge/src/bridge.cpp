@@ -469,10 +469,30 @@ void Bridge::tick() {
   next_deadline_.reset();
 }
 
+void Bridge::tick_commands() {
+  std::lock_guard lock(mutex_);
+  const SteadyTime now = clock_->steady();
+  Outcome outcome;
+  tracker_->expire(now, outcome);
+  settle(outcome);
+  if (now >= next_status_) {
+    publish_gateway_status();
+    next_status_ = now + kStatusPeriod;
+  }
+  next_deadline_.reset();
+}
+
 SteadyTime Bridge::next_deadline() const {
   std::lock_guard lock(mutex_);
   if (!next_deadline_) next_deadline_ = earliest_deadline();
   return *next_deadline_;
+}
+
+SteadyTime Bridge::next_command_deadline() const {
+  std::lock_guard lock(mutex_);
+  SteadyTime next = next_status_;
+  if (const auto deadline = tracker_->next_deadline()) next = std::min(next, *deadline);
+  return next;
 }
 
 SteadyTime Bridge::earliest_deadline() const {

@@ -17,6 +17,9 @@ constexpr Duration kLongestWait = 1s;
 constexpr Duration kLastStatusesWait = 500ms;
 // Frames taken off the bus per wake-up at most; the deadlines are looked at between batches.
 constexpr std::size_t kReceiveBatch = 64;
+// Batches taken without waiting before a deadline is kept: a backlog of 8 x 64 frames is longer
+// than a 32-valve bus's burst of replies.
+constexpr int kBatchesBeforeDeadlines = 8;
 
 }  // namespace
 
@@ -129,8 +132,8 @@ void Gateway::stop() {
   if (backend_.simulator) backend_.simulator->stop();
 }
 
-Duration Gateway::until_next_deadline() const {
-  return std::clamp(bridge_->next_deadline() - clock_->steady(), Duration{0}, kLongestWait);
+Duration Gateway::until(SteadyTime deadline) const {
+  return std::clamp(deadline - clock_->steady(), Duration{0}, kLongestWait);
 }
 
 // Frames are taken in bursts: one wake-up and one look at the deadlines per burst. On a busy
@@ -144,15 +147,24 @@ void Gateway::read_bus(std::stop_token stop) {
   bool busy = false;
   SteadyTime last_batch{};
   while (!stop.stop_requested()) {
-    Duration left = until_next_deadline();
+    Duration left = until(bridge_->next_deadline());
     if (left <= Duration{0}) {
+      // What the bus holds first (a few batches at most): on a starved machine the I'm Here
+      // that keeps a valve online may be waiting in the socket when its deadline passes.
+      for (int batch = 0; batch < kBatchesBeforeDeadlines; ++batch) {
+        frames.clear();
+        if (backend_.bus->receive_batch(frames, kReceiveBatch, std::chrono::milliseconds(0)) == 0) {
+          break;
+        }
+        bridge_->on_frames(frames);
+      }
       bridge_->tick();
       log_changes();  // at least once a second, never per frame
       continue;
     }
     if (busy) {
       std::this_thread::sleep_for(std::min(window, left));
-      left = until_next_deadline();
+      left = until(bridge_->next_deadline());
     }
     frames.clear();
     // After a coalescing wait, take what gathered without blocking: nothing means quiet again.
@@ -176,12 +188,13 @@ void Gateway::read_bus(std::stop_token stop) {
 // command sets, however soon, since the reader may be waiting for one further away.
 void Gateway::take_commands(std::stop_token stop) {
   while (!stop.stop_requested()) {
-    const auto events = commands_->wait(until_next_deadline());
+    const auto events = commands_->wait(until(bridge_->next_command_deadline()));
     for (const auto& received : events.commands) {
       bridge_->on_command(received.command, received.writer);
     }
     for (const auto& commander : events.lost_commanders) commander_lost(commander);
-    if (until_next_deadline() <= Duration{0}) bridge_->tick();
+    // Valves going quiet are the bus reader's to judge (Bridge::tick).
+    if (until(bridge_->next_command_deadline()) <= Duration{0}) bridge_->tick_commands();
   }
 }
 

@@ -101,12 +101,20 @@ class Bridge {
   void on_command(const ValveCommand& command, const std::string& commander = {});
 
   // Offline detection, command deadlines and the once-a-second gateway status: whatever is due.
+  // For the thread that reads the bus, right after it took what the bus holds: a starved reader
+  // must not call a valve offline whose I'm Here waits unread.
   void tick();
+
+  // The same but offline detection: for any other thread (the one that takes commands).
+  void tick_commands();
 
   // When tick() next has something to do (at most a second away: the gateway status), or
   // earlier, never later: a valve's I'm Here pushes its offline deadline back without a new
   // look at every valve, and a tick that finds nothing due takes that look.
   SteadyTime next_deadline() const;
+
+  // When tick_commands() next has something to do.
+  SteadyTime next_command_deadline() const;
 
   // Sends Stop to every online valve; returns how many were sent. For shutdown.
   std::size_t stop_all();

@@ -45,7 +45,7 @@ class Gateway {
   void take_commands(std::stop_token stop);
   void commander_lost(const std::string& commander);
   void log_changes();
-  Duration until_next_deadline() const;
+  Duration until(SteadyTime deadline) const;
 
   GatewayConfig config_;
   BusBackend backend_;
