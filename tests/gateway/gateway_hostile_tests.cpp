@@ -330,6 +330,20 @@ TEST_F(GatewayE2E, OnlyTheGatewayThatOwnsASerialActsOnIt) {
   EXPECT_EQ(right_owner->bridge().counters().commands_ignored, 1u);
 }
 
+// Under a sanitizer (ASan at -O0, TSan) the gateway takes commands several times slower: 9,028
+// commands of a flood cut short at 20 s left 256 without a final state 30 s later. There the
+// flood is 2,000 in 0.2 s, still 100 times the limit; the ci build floods 10,000.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define TEEJET_HOSTILE_TESTS_SANITIZED
+#endif
+#endif
+#ifdef TEEJET_HOSTILE_TESTS_SANITIZED
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
 // 10,000 commands in a second to one valve: the per-valve limit (100/s, burst 20) keeps the bus
 // for the others, every command ends in exactly one final state, and valve 2 still moves.
 TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
@@ -364,7 +378,7 @@ TEST_F(GatewayE2E, AFloodToOneValveIsLimitedAndEveryCommandEnds) {
   // Stop's bucket is separate: the flood of moves starts with a full one of its own.
   const auto rejected_before = gateway.bridge().counters().commands_rejected;
 
-  constexpr std::uint32_t kFlood = 10'000;
+  constexpr std::uint32_t kFlood = kSanitized ? 2'000 : 10'000;
   std::atomic<std::uint32_t> written{0};
   std::uint32_t refused = 0;
   std::vector<std::uint32_t> sent_ids;

@@ -33,9 +33,10 @@ void FramePublisher::on_frame(const codec::CanFrame& frame, can::FrameDirection 
       frame, gateway_, can_interface_,
       direction == can::FrameDirection::kSent ? FRAME_SENT : FRAME_RECEIVED,
       unix_nanoseconds(stamp));
-  const auto result = stamps_.write(sample.stamp_ns(), [&](const auto& source_stamp) {
-    return writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, source_stamp);
-  });
+  // Best effort: a reader drops a frame older than the last it got, never files it late, so
+  // the stamp stays the frame's own even where a received frame follows a later sent one.
+  const auto result =
+      writer_->write_w_timestamp(&sample, fdds::HANDLE_NIL, to_dds_time(sample.stamp_ns()));
   if (result == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) return;
   // Best effort loses frames under load by design; a write that fails says something is wrong
   // with the writer itself. Once, then every thousandth, so that a full bus never floods the log.

@@ -12,8 +12,10 @@
 // datagram and stamps that go back: a presence stamped with its valve's last I'm Here after
 // another valve's later one, a replay of several gateways' samples, a clock stepped back.
 //
-// Every writer of ours stamps through one of these: each sample's source timestamp is the one it
-// asks for, or 1 ns after the writer's previous one when that would go back.
+// Every reliable writer of ours stamps through one of these: each sample's source timestamp is
+// the one it asks for, or the writer's previous one when that would go back (equal stamps of one
+// writer are filed by sequence number). A best-effort writer needs none: its reader drops a
+// sample older than the last it got instead of filing it late.
 
 #include <algorithm>
 #include <chrono>
@@ -32,7 +34,7 @@ class SourceStamps {
   template <class Write>
   auto write(std::uint64_t wanted_ns, Write&& write) {
     std::lock_guard lock(mutex_);
-    last_ns_ = std::max(wanted_ns, last_ns_ + 1);
+    last_ns_ = std::max(wanted_ns, last_ns_);
     return write(to_dds_time(last_ns_));
   }
 

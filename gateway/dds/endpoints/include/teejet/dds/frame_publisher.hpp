@@ -11,7 +11,6 @@
 
 #include "teejet/can/observed_bus.hpp"
 #include "teejet/dds/participant.hpp"
-#include "teejet/dds/source_stamps.hpp"
 
 namespace teejet::dds {
 
@@ -33,7 +32,6 @@ class FramePublisher final : public can::FrameObserver {
                  std::string can_interface);
 
   eprosima::fastdds::dds::DataWriter* const writer_;
-  SourceStamps stamps_;
   const std::string gateway_;
   const std::string can_interface_;
 };

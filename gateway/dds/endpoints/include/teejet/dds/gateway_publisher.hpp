@@ -37,8 +37,8 @@ class SampleWriters<std::variant<Samples...>> {
     return std::get<Slot<Sample>>(writers_).writer;
   }
 
-  // Writes `sample` stamped `stamp_ns` (Unix nanoseconds; 0: now), or 1 ns after the writer's
-  // previous sample when that would go back.
+  // Writes `sample` stamped `stamp_ns` (Unix nanoseconds; 0: now), or at the writer's previous
+  // sample's stamp when that would go back.
   template <class Sample>
   eprosima::fastrtps::types::ReturnCode_t write(const Sample& sample, std::uint64_t stamp_ns) {
     auto& slot = std::get<Slot<Sample>>(writers_);
