@@ -119,13 +119,15 @@ class TypedReader final : public TopicReader {
 template <class Sample>
 class TypedWriter final : public TopicWriter {
  public:
-  explicit TypedWriter(DataWriter* writer) : writer_(writer) {}
+  explicit TypedWriter(DataWriter* writer)
+      : writer_(writer), held_(writer->get_qos().reliability().kind == RELIABLE_RELIABILITY_QOS) {}
 
   Status write(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    // A replay of several gateways' samples goes back in time from one to the next.
-    const auto code = stamps_.write(source_ns, [&](const auto& stamp) {
+    // A replay of several gateways' samples goes back in time from one to the next; a reliable
+    // writer holds such a stamp at the previous one (SourceStamps), a best-effort one need not.
+    const auto code = stamped(source_ns, [&](const auto& stamp) {
       return writer_->write_w_timestamp(&sample, HANDLE_NIL, stamp);
     });
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("write refused", code);
@@ -135,7 +137,7 @@ class TypedWriter final : public TopicWriter {
   Status dispose(std::span<const std::uint8_t> payload, std::uint64_t source_ns) override {
     Sample sample;
     if (auto parsed = parse(payload, sample); !parsed) return parsed;
-    const auto code = stamps_.write(source_ns, [&](const auto& stamp) {
+    const auto code = stamped(source_ns, [&](const auto& stamp) {
       return writer_->dispose_w_timestamp(&sample, HANDLE_NIL, stamp);
     });
     if (code != ReturnCode_t::RETCODE_OK) return dds_error("dispose refused", code);
@@ -171,7 +173,14 @@ class TypedWriter final : public TopicWriter {
     return {};
   }
 
+  template <class Write>
+  ReturnCode_t stamped(std::uint64_t source_ns, Write&& write) {
+    if (!held_) return write(dds::to_dds_time(source_ns));
+    return stamps_.write(source_ns, std::forward<Write>(write));
+  }
+
   DataWriter* writer_;
+  const bool held_;
   dds::SourceStamps stamps_;
   typename PubSubTypeOf<Sample>::type type_;
 };
