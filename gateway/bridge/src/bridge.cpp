@@ -460,19 +460,16 @@ void Bridge::tick() {
     tracker_->offline(change.valve.serial, outcome);
     displaced_by_.erase(change.valve.serial);
   }
-  tracker_->expire(now, outcome);
-  settle(outcome);
-  if (now >= next_status_) {
-    publish_gateway_status();
-    next_status_ = now + kStatusPeriod;
-  }
-  next_deadline_.reset();
+  keep_command_deadlines(now, outcome);
 }
 
 void Bridge::tick_commands() {
   std::lock_guard lock(mutex_);
-  const SteadyTime now = clock_->steady();
   Outcome outcome;
+  keep_command_deadlines(clock_->steady(), outcome);
+}
+
+void Bridge::keep_command_deadlines(SteadyTime now, Outcome& outcome) {
   tracker_->expire(now, outcome);
   settle(outcome);
   if (now >= next_status_) {
@@ -490,18 +487,21 @@ SteadyTime Bridge::next_deadline() const {
 
 SteadyTime Bridge::next_command_deadline() const {
   std::lock_guard lock(mutex_);
+  return earliest_command_deadline();
+}
+
+SteadyTime Bridge::earliest_command_deadline() const {
   SteadyTime next = next_status_;
   if (const auto deadline = tracker_->next_deadline()) next = std::min(next, *deadline);
   return next;
 }
 
 SteadyTime Bridge::earliest_deadline() const {
-  SteadyTime next = next_status_;
+  SteadyTime next = earliest_command_deadline();
   if (const auto expiry = directory_.next_expiry()) {
     // Expiry is "older than the timeout": the first instant it is due is one tick later.
     next = std::min(next, *expiry + Duration{1});
   }
-  if (const auto deadline = tracker_->next_deadline()) next = std::min(next, *deadline);
   return next;
 }
 

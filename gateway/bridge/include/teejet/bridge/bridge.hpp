@@ -172,7 +172,11 @@ class Bridge {
   bool stop_valve(std::uint32_t serial, const std::string& reason);
   Status send(std::uint8_t address, const codec::ToValveMessage& message);
   void publish_gateway_status();
-  SteadyTime earliest_deadline() const;  // mutex_ held; walks every valve
+  SteadyTime earliest_deadline() const;          // mutex_ held; walks every valve
+  SteadyTime earliest_command_deadline() const;  // mutex_ held: commands and the status
+  // Ends the commands past their deadline into `outcome`, settles it, publishes the status when
+  // due. mutex_ held.
+  void keep_command_deadlines(SteadyTime now, Outcome& outcome);
 
   const BridgeConfig config_;
   can::Bus& bus_;

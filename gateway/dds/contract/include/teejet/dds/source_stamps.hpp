@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <mutex>
 
+#include "teejet/core/time.hpp"
 #include "teejet/dds/participant.hpp"
 
 namespace teejet::dds {
@@ -41,20 +42,12 @@ class SourceStamps {
   // The same, stamped now.
   template <class Write>
   auto write_now(Write&& write) {
-    const auto now = std::chrono::system_clock::now().time_since_epoch();
-    return this->write(static_cast<std::uint64_t>(
-                           std::chrono::duration_cast<std::chrono::nanoseconds>(now).count()),
+    return this->write(unix_nanoseconds(std::chrono::system_clock::now()),
                        std::forward<Write>(write));
   }
 
-  // The stamp of the last write (0 before the first).
-  std::uint64_t last_ns() const {
-    std::lock_guard lock(mutex_);
-    return last_ns_;
-  }
-
  private:
-  mutable std::mutex mutex_;
+  std::mutex mutex_;
   std::uint64_t last_ns_ = 0;
 };
 
