@@ -531,6 +531,39 @@ TEST_F(BridgeTest, GatewayStatusOnceASecondStartingAfterOneIAmHerePeriod) {
   EXPECT_EQ(sink.gateway_statuses()[1].stamp_ns(), unix_nanoseconds(kStart + 2s));
 }
 
+// Two valves with one serial on two buses (or a replay of one): a command to that serial would
+// move whichever valve; each gateway lists its online serials in its status and refuses it.
+TEST_F(BridgeTest, ASerialAnotherGatewayReportsOnlineIsListedAndItsCommandsRefused) {
+  struct Others final : OtherGateways {
+    std::vector<std::string> reporting_online(std::uint32_t serial) const override {
+      if (serial == 2) return {"rig-2"};
+      return {};
+    }
+  } others;
+  Bridge bridge(config(), gateway_bus, sink, clock, &others);
+  announce(bridge, 0xD8, 1, kStart);
+  announce(bridge, 0xD9, 2, kStart);
+  announce(bridge, 0xDA, 3, kStart);
+  tick_at(bridge, kStart + 1s);
+  ASSERT_EQ(sink.gateway_statuses().size(), 1u);
+  EXPECT_EQ(sink.gateway_statuses()[0].serials_online(), (std::vector<std::uint32_t>{1, 2, 3}));
+  (void)sent();
+  command_at(bridge, kStart + 1s, from(kEcu, 7, move_to(2, 45.0f)));
+  EXPECT_EQ(sink.states_of(7), std::vector{COMMAND_REJECTED});
+  EXPECT_EQ(sink.last_reason(),
+            "valve TJV000002 is also online on gateway rig-2: two valves carry this serial, or "
+            "something replays it; commands to it but Stop are refused until only one gateway "
+            "reports it");
+  EXPECT_TRUE(sent().empty());
+  command_at(bridge, kStart + 1s, from(kEcu, 8, move_to(1, 45.0f)));
+  EXPECT_EQ(sink.states_of(8), std::vector{COMMAND_ACCEPTED});
+  // A Stop is safe for both valves: each gateway stops its own.
+  (void)sent();
+  command_at(bridge, kStart + 1s, from(kEcu, 9, stop(2)));
+  EXPECT_EQ(sink.states_of(9), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(sent().size(), 1u);
+}
+
 // The thread that takes commands keeps their deadlines but never calls a valve offline: only
 // the bus reader may, once it took what the bus holds (on a starved machine the I'm Here can
 // be waiting there: a command to that valve was REJECTED "offline" in a flood under ASan).

@@ -87,6 +87,11 @@ TEST(ValvectlTable, AValveRowNamesTheParticipantThatPublishesIt) {
   table.on_presence(presence(1, true, "b"), "01.0f.bb");  // moved to another gateway's bus
   EXPECT_EQ(table.row(1)->participant, "01.0f.bb");
   EXPECT_EQ(table.row(1)->gateway, "b");
+  // Until a calls it offline (its timeout), both report it.
+  EXPECT_EQ(table.row(1)->also_reported_by, std::vector<std::string>{"a"});
+  table.on_presence(presence(1, false, "a"), "01.0f.aa");
+  EXPECT_EQ(table.row(1)->gateway, "b");
+  EXPECT_TRUE(table.row(1)->also_reported_by.empty());
 }
 
 TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBack) {
@@ -104,6 +109,32 @@ TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBac
   table.on_participant_liveliness("01.0f.aa", true);
   EXPECT_FALSE(table.row(1)->gateway_lost);
   EXPECT_EQ(table.online_count(), 2u);
+}
+
+// One DDS instance per serial, whoever publishes it: two gateways reporting one serial online
+// (two valves with one serial, or a replay) are both kept, never one hiding the other.
+TEST(ValvectlTable, ASerialTwoGatewaysReportOnlineNamesTheOtherUntilOneSaysOfflineOrIsLost) {
+  ValveTable table;
+  table.on_gateway_status(gateway_status("a", 1), "01.0f.aa");
+  table.on_gateway_status(gateway_status("b", 1), "01.0f.bb");
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  table.on_presence(presence(1, true, "b"), "01.0f.bb");
+  EXPECT_EQ(table.row(1)->gateway, "b");
+  EXPECT_EQ(table.row(1)->also_reported_by, std::vector<std::string>{"a"});
+  EXPECT_EQ(table.online_count(), 1u);
+  EXPECT_TRUE(table.directory_complete());  // each gateway's one valve is there
+  // b's valve goes offline: a's report shows, online, whatever came last.
+  table.on_presence(presence(1, false, "b"), "01.0f.bb");
+  EXPECT_EQ(table.row(1)->gateway, "a");
+  EXPECT_TRUE(table.row(1)->online);
+  EXPECT_TRUE(table.row(1)->also_reported_by.empty());
+  table.on_presence(presence(1, true, "b"), "01.0f.bb");
+  EXPECT_EQ(table.row(1)->also_reported_by.size(), 1u);
+  // a vanishes: its word no longer counts.
+  table.on_participant_liveliness("01.0f.aa", false);
+  EXPECT_EQ(table.row(1)->gateway, "b");
+  EXPECT_FALSE(table.row(1)->gateway_lost);
+  EXPECT_TRUE(table.row(1)->also_reported_by.empty());
 }
 
 TEST(ValvectlTable, ErrorsLatchUntilCleared) {

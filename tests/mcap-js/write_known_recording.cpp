@@ -313,6 +313,7 @@ struct GatewayValues {
   std::uint32_t online, known;
   std::uint64_t stamp;
   std::uint32_t gateways_seen;
+  std::vector<std::uint32_t> serials_online;
 };
 
 Sample gateway_status(const GatewayValues& v) {
@@ -330,6 +331,7 @@ Sample gateway_status(const GatewayValues& v) {
   s.valves_known(v.known);
   s.stamp_ns(v.stamp);
   s.gateways_seen(v.gateways_seen);
+  s.serials_online(v.serials_online);
   return make(s, {{"gateway", v.gateway},
                   {"can_interface", v.can_interface},
                   {"bus_state", static_cast<std::uint32_t>(v.bus_state)},
@@ -342,7 +344,8 @@ Sample gateway_status(const GatewayValues& v) {
                   {"valves_online", v.online},
                   {"valves_known", v.known},
                   {"stamp_ns", u64(v.stamp)},
-                  {"gateways_seen", v.gateways_seen}});
+                  {"gateways_seen", v.gateways_seen},
+                  {"serials_online", v.serials_online}});
 }
 
 // A data frame of `data`; a remote frame (remote_dlc) asks for that many bytes and carries none.
@@ -458,10 +461,34 @@ std::vector<ChannelSpec> known_channels() {
        status(kC, 3, "x", COMMAND_STOP, COMMAND_TIMED_OUT, "no reply in 2 s", kBase + 33),
        status(kC, 4, "x", COMMAND_STOP, COMMAND_SUPERSEDED, "", kBase + 34)});
   add(topics::kGatewayStatus, "GatewayStatus",
-      {gateway_status({"boom-left", "can0", BUS_ERROR_ACTIVE, 0, 0, kAbove53, 42, 0, 1, 24, 32,
-                       kBase + 35, 8}),
-       gateway_status({k64, "vcan31", BUS_OFF, 65535, 255, 0, 0xFFFFFFFFFFFFFFFFULL, 7, 0, 0, 0,
-                       kAbove53 + 35, 0xFFFFFFFF})});
+      {gateway_status({"boom-left",
+                       "can0",
+                       BUS_ERROR_ACTIVE,
+                       0,
+                       0,
+                       kAbove53,
+                       42,
+                       0,
+                       1,
+                       24,
+                       32,
+                       kBase + 35,
+                       8,
+                       {100001, 100002, 0xFFFFFFFF}}),
+       gateway_status({k64,
+                       "vcan31",
+                       BUS_OFF,
+                       65535,
+                       255,
+                       0,
+                       0xFFFFFFFFFFFFFFFFULL,
+                       7,
+                       0,
+                       0,
+                       0,
+                       kAbove53 + 35,
+                       0xFFFFFFFF,
+                       {}})});
   // Every data length 0..8, standard and extended identifiers, both directions.
   std::vector<Sample> frames;
   for (std::uint8_t length = 0; length <= 8; ++length) {

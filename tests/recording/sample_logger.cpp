@@ -131,7 +131,8 @@ json fields(const teejet::GatewayStatus& s) {
           {"valves_online", s.valves_online()},
           {"valves_known", s.valves_known()},
           {"stamp_ns", u64(s.stamp_ns())},
-          {"gateways_seen", s.gateways_seen()}};
+          {"gateways_seen", s.gateways_seen()},
+          {"serials_online", s.serials_online()}};
 }
 json fields(const teejet::BusFrame& s) {
   return {{"gateway", s.gateway().to_string()},

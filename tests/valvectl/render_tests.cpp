@@ -51,6 +51,20 @@ TEST(ValvectlRender, BootModeShowsInTheOnlineColumn) {
   EXPECT_NE(render_table(rows).find("0xD8  boot"), std::string::npos);
 }
 
+TEST(ValvectlRender, ASerialOnlineOnTwoGatewaysGetsAWarningBelowTheTable) {
+  auto rows = two_valves();
+  rows[0].also_reported_by = {"rig-2"};
+  const auto table = render_table(rows);
+  EXPECT_NE(
+      table.find("\nwarning: TJV000001 is online on boom and on rig-2: two valves carry this "
+                 "serial, or something replays it; its gateways refuse commands to it but Stop "
+                 "until only one reports it\n"),
+      std::string::npos)
+      << table;
+  EXPECT_EQ(to_json(rows)[0]["also_reported_by"], (nlohmann::json{"rig-2"}));
+  EXPECT_EQ(to_json(rows)[1]["also_reported_by"], nlohmann::json::array());
+}
+
 TEST(ValvectlRender, JsonListHasOneObjectPerValveWithNullsForMissingValues) {
   const auto json = to_json(two_valves());
   ASSERT_TRUE(json.is_array());

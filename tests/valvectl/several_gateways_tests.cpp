@@ -137,6 +137,40 @@ TEST_F(SeveralGateways, ASecondGatewayWithTheSameNameIsReportedByBoth) {
       << gateways_[0]->out();
 }
 
+// Two valves with one serial on two buses (a cloned serial, or a replay of one): rig-5 simulates
+// TJV100001 .. TJV100004 as rig-1 does. Both gateways say so, valvectl shows it, and both refuse
+// a command to such a serial instead of moving whichever valve; once rig-5 is gone the serial
+// is rig-1's alone again.
+TEST_F(SeveralGateways, ASerialOnlineOnTwoGatewaysIsReportedByBothAndItsCommandsRefused) {
+  auto twin = start_gateway("rig-5", 1);
+  const std::string said = "valve TJV100002 is online on this gateway's bus and on gateway";
+  EXPECT_TRUE(twin->wait_for_stdout(said + " \"rig-1\"", twin->elapsed() + 30000ms)) << twin->out();
+  EXPECT_TRUE(gateways_[0]->wait_for_stdout(said + " \"rig-5\"", gateways_[0]->elapsed() + 30000ms))
+      << gateways_[0]->out();
+
+  const auto listed = valvectl({"--timeout", "30", "list", "--wait-for", "16"});
+  EXPECT_EQ(listed.exit_code, kExitOk) << describe(listed);
+  EXPECT_EQ(count_of(listed.out, "two valves carry this serial"), 4u) << describe(listed);
+  EXPECT_TRUE(contains(listed.out, "warning: TJV100002 is online on rig-")) << describe(listed);
+
+  const auto refused = valvectl({"--timeout", "30", "move", "TJV100002", "--to", "30", "--wait"});
+  EXPECT_EQ(refused.exit_code, kExitRejected) << describe(refused);
+  EXPECT_TRUE(contains(refused.out + refused.err,
+                       ": REJECTED: valve TJV100002 is also online on "
+                       "gateway rig-"))
+      << describe(refused);
+
+  twin->signal(SIGTERM);
+  EXPECT_EQ(twin->wait(twin->elapsed() + 30000ms).exit_code, 0) << twin->out();
+  EXPECT_TRUE(gateways_[0]->wait_for_stdout(
+      "valve TJV100002 is no longer reported online by gateway \"rig-5\"",
+      gateways_[0]->elapsed() + 30000ms))
+      << gateways_[0]->out();
+  const auto moved = valvectl({"--timeout", "30", "move", "TJV100002", "--to", "30", "--wait"});
+  EXPECT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  EXPECT_TRUE(contains(moved.out, ": COMPLETED")) << describe(moved);
+}
+
 // Last: it kills rig-4. A gateway SIGKILLed (a crash, a cut cable) used to look alive for good:
 // every valve online, frozen where it was. Its state writers' liveliness lapses 3 s after.
 TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknown) {

@@ -91,6 +91,13 @@ std::string render_table(const std::vector<ValveRow>& rows) {
   for (const Column& column : columns) header.emplace_back(column.header);
   append_line(out, header);
   for (const auto& line : cells) append_line(out, line);
+  for (const ValveRow& row : rows) {
+    if (row.also_reported_by.empty()) continue;
+    out << "warning: " << codec::format_serial(row.serial) << " is online on " << row.gateway;
+    for (const auto& other : row.also_reported_by) out << " and on " << other;
+    out << ": two valves carry this serial, or something replays it; its gateways refuse "
+           "commands to it but Stop until only one reports it\n";
+  }
   return out.str();
 }
 

@@ -15,7 +15,8 @@ namespace teejet::valvectl {
 
 using namespace client;
 
-// An aligned text table with a header line; a missing value shows as "-".
+// An aligned text table with a header line; a missing value shows as "-". Below it, a warning
+// line for each serial that more than one gateway reports online.
 std::string render_table(const std::vector<ValveRow>& rows);
 // One line per gateway: name, interface, bus state, valves online/known, frame counters.
 std::string render_gateways(const std::vector<GatewaySummary>& gateways);

@@ -16,6 +16,8 @@ using namespace std::chrono_literals;
 
 // The first gateway status waits this long: one I'm Here period.
 constexpr Duration kStatusPeriod = 1s;
+// GatewayStatus.serials_online's bound (idl/teejet/valve.idl): two valves at each address.
+constexpr std::size_t kMaxSerialsOnline = 64;
 
 teejet::BusState to_idl(can::BusState state) {
   switch (state) {
@@ -78,11 +80,13 @@ std::vector<codec::ToValveMessage> default_poll_schedule() {
           codec::RequestCycleCounts{50}};
 }
 
-Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<const Clock> clock)
+Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<const Clock> clock,
+               const OtherGateways* others)
     : config_(std::move(config)),
       bus_(bus),
       sink_(sink),
       clock_(std::move(clock)),
+      others_(others),
       directory_(config_.offline_after),
       resent_polls_(resent_polls_of(config_.poll)),
       tracker_(std::make_unique<CommandTracker>(config_)),
@@ -309,9 +313,11 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   // In this order; the first reason ends the command REJECTED. Stop passes the boot-code check
   // and has a rate bucket of its own, so that a stop is never refused when it can be sent.
   static constexpr std::array kChecks{
-      &Bridge::refuse_unknown_serial, &Bridge::refuse_offline,   &Bridge::refuse_contested,
-      &Bridge::refuse_baud_change,    &Bridge::translate,        &Bridge::refuse_in_boot_code,
-      &Bridge::encode_frame,          &Bridge::refuse_over_rate, &Bridge::send_frame,
+      &Bridge::refuse_unknown_serial, &Bridge::refuse_offline,
+      &Bridge::refuse_contested,      &Bridge::refuse_online_elsewhere,
+      &Bridge::refuse_baud_change,    &Bridge::translate,
+      &Bridge::refuse_in_boot_code,   &Bridge::encode_frame,
+      &Bridge::refuse_over_rate,      &Bridge::send_frame,
   };
   for (const auto refusal_of : kChecks) {
     if (const auto reason = (this->*refusal_of)(check)) {
@@ -340,6 +346,20 @@ std::optional<std::string> Bridge::refuse_contested(CommandUnderCheck& check) {
     return contest_reason(*contest);
   }
   return std::nullopt;
+}
+
+std::optional<std::string> Bridge::refuse_online_elsewhere(CommandUnderCheck& check) {
+  // Two valves with one serial, or a replay: which one a command was meant for is unknown. A
+  // Stop is safe for both, and each gateway stops its own.
+  if (others_ == nullptr || check.command.kind() == COMMAND_STOP) return std::nullopt;
+  const auto others = others_->reporting_online(check.command.serial());
+  if (others.empty()) return std::nullopt;
+  std::string names;
+  for (const auto& name : others) names += (names.empty() ? "" : ", ") + name;
+  return "valve " + codec::format_serial(check.command.serial()) + " is also online on gateway " +
+         names +
+         ": two valves carry this serial, or something replays it; commands to it but "
+         "Stop are refused until only one gateway reports it";
 }
 
 std::optional<std::string> Bridge::refuse_baud_change(CommandUnderCheck& check) {
@@ -519,6 +539,11 @@ void Bridge::publish_gateway_status() {
   status.rx_dropped(bus.rx_dropped);
   status.valves_online(static_cast<std::uint32_t>(directory_.online_count()));
   status.valves_known(static_cast<std::uint32_t>(directory_.valves().size()));
+  std::vector<std::uint32_t> online;
+  for (const auto& valve : directory_.valves()) {
+    if (valve.online && online.size() < kMaxSerialsOnline) online.push_back(valve.serial);
+  }
+  status.serials_online(std::move(online));
   status.stamp_ns(unix_nanoseconds(clock_->wall()));
   sink_.gateway_status(status);
 }

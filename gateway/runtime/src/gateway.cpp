@@ -69,7 +69,8 @@ Status Gateway::start() {
     observed_bus_ = observed.get();
     backend_.bus = std::move(observed);
   }
-  bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_);
+  bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_,
+                                             publisher_->other_gateways());
   auto commands = dds::CommandSubscription::create(*participant_, lost_commanders_);
   if (!commands) return fail(commands.error());
   commands_ = std::move(*commands);

@@ -221,9 +221,16 @@
     card.dataset.online = state;
     const online = el("span", { class: "online-state", "data-online": state },
                       d.gateway_lost ? "unknown (gateway lost)" : d.online ? "online" : "offline");
+    // Two gateways report this serial online: two valves carry it, or something replays it.
+    const others = d.also_reported_by || [];
+    card.dataset.contested = String(others.length > 0);
     card.querySelector(".meta").replaceChildren(
       `address ${d.address} · gateway ${d.gateway || dash} · `, online,
-      d.boot_mode ? " · boot mode" : "");
+      d.boot_mode ? " · boot mode" : "",
+      ...(others.length > 0
+        ? [" · ", el("span", { class: "contested" },
+                     `also online on ${others.join(", ")}: commands but Stop refused`)]
+        : []));
     card.querySelector(".position").textContent = fixed(d.position, 1, "°");
     const needle = card.querySelector(".needle");
     if (d.position === null) {

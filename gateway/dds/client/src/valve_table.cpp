@@ -44,13 +44,9 @@ ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
 }
 
 void ValveTable::on_presence(const ValvePresence& presence, const std::string& participant) {
-  Entry& found = entry(presence.serial());
-  found.present = true;
-  found.row.address = presence.address();
-  found.row.online = presence.online();
-  found.row.boot_mode = presence.boot_mode();
-  found.row.gateway = presence.gateway().to_string();
-  found.row.participant = participant;
+  const std::string key =
+      participant.empty() ? "gateway " + presence.gateway().to_string() : participant;
+  entry(presence.serial()).reports[key] = Report{presence, participant, ++reports_};
 }
 
 void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
@@ -97,24 +93,46 @@ bool ValveTable::lost(const std::string& participant) const {
   return !participant.empty() && lost_participants_.contains(participant);
 }
 
-ValveRow ValveTable::shown(const ValveRow& row) const {
-  ValveRow copy = row;
-  copy.gateway_lost = lost(row.participant);
-  return copy;
+ValveRow ValveTable::shown(const Entry& found) const {
+  const Report* primary = nullptr;
+  const auto better = [this](const Report& report, const Report* than) {
+    if (than == nullptr) return true;
+    const bool counts = report.presence.online() && !lost(report.participant);
+    const bool than_counts = than->presence.online() && !lost(than->participant);
+    if (counts != than_counts) return counts;
+    return report.order > than->order;
+  };
+  for (const auto& [key, report] : found.reports) {
+    if (better(report, primary)) primary = &report;
+  }
+  ValveRow row = found.row;
+  if (primary == nullptr) return row;
+  row.address = primary->presence.address();
+  row.online = primary->presence.online();
+  row.boot_mode = primary->presence.boot_mode();
+  row.gateway = primary->presence.gateway().to_string();
+  row.participant = primary->participant;
+  row.gateway_lost = lost(primary->participant);
+  for (const auto& [key, report] : found.reports) {
+    if (&report != primary && report.presence.online() && !lost(report.participant)) {
+      row.also_reported_by.push_back(report.presence.gateway().to_string());
+    }
+  }
+  return row;
 }
 
 std::vector<ValveRow> ValveTable::rows() const {
   std::vector<ValveRow> out;
   for (const auto& [serial, found] : rows_) {
-    if (found.present) out.push_back(shown(found.row));
+    if (!found.reports.empty()) out.push_back(shown(found));
   }
   return out;
 }
 
 std::optional<ValveRow> ValveTable::row(std::uint32_t serial) const {
   const auto it = rows_.find(serial);
-  if (it == rows_.end() || !it->second.present) return std::nullopt;
-  return shown(it->second.row);
+  if (it == rows_.end() || it->second.reports.empty()) return std::nullopt;
+  return shown(it->second);
 }
 
 std::vector<GatewaySummary> ValveTable::gateways() const {
@@ -140,7 +158,10 @@ std::optional<Reply> ValveTable::reply(std::uint32_t serial, std::string_view su
 std::size_t ValveTable::online_count() const {
   return static_cast<std::size_t>(
       std::count_if(rows_.begin(), rows_.end(), [this](const auto& item) {
-        return item.second.present && item.second.row.online && !lost(item.second.row.participant);
+        const auto& reports = item.second.reports;
+        return std::any_of(reports.begin(), reports.end(), [this](const auto& report) {
+          return report.second.presence.online() && !lost(report.second.participant);
+        });
       }));
 }
 
@@ -158,7 +179,10 @@ bool ValveTable::directory_complete() const {
     // Captured by name: clang before 16 cannot capture a structured binding.
     const auto known =
         std::count_if(rows_.begin(), rows_.end(), [&gateway = name](const auto& item) {
-          return item.second.present && item.second.row.gateway == gateway;
+          const auto& reports = item.second.reports;
+          return std::any_of(reports.begin(), reports.end(), [&gateway](const auto& report) {
+            return report.second.presence.gateway().to_string() == gateway;
+          });
         });
     if (static_cast<std::uint64_t>(known) < summary.valves_known) return false;
   }
@@ -166,9 +190,9 @@ bool ValveTable::directory_complete() const {
 }
 
 bool ValveTable::telemetry_complete() const {
-  return std::all_of(rows_.begin(), rows_.end(), [](const auto& item) {
-    const ValveRow& row = item.second.row;
-    return !item.second.present || !row.online ||
+  return std::all_of(rows_.begin(), rows_.end(), [this](const auto& item) {
+    const ValveRow row = shown(item.second);
+    return item.second.reports.empty() || !row.online ||
            (row.position_degrees() && row.temperature_c() && row.volts());
   });
 }

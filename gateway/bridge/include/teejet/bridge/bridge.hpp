@@ -72,6 +72,15 @@ class Sink {
   virtual void gateway_status(const GatewayStatus& status) = 0;
 };
 
+// What the other gateways on the domain say of their buses. The DDS adapter implements it from
+// their GatewayStatus; the bridge refuses commands to a serial another gateway reports online.
+class OtherGateways {
+ public:
+  virtual ~OtherGateways() = default;
+  // The names of the other gateways that report `serial` online on their bus; empty for none.
+  virtual std::vector<std::string> reporting_online(std::uint32_t serial) const = 0;
+};
+
 // Counters beyond what the bus itself counts.
 struct BridgeCounters {
   std::uint64_t decode_errors = 0;  // frames of this PGN that did not decode
@@ -85,8 +94,10 @@ struct BridgeCounters {
 
 class Bridge {
  public:
+  // `others` (may be null: none heard) must outlive the bridge.
   Bridge(BridgeConfig config, can::Bus& bus, Sink& sink,
-         std::shared_ptr<const Clock> clock = system_clock());
+         std::shared_ptr<const Clock> clock = system_clock(),
+         const OtherGateways* others = nullptr);
   ~Bridge();
   Bridge(const Bridge&) = delete;
   Bridge& operator=(const Bridge&) = delete;
@@ -157,6 +168,7 @@ class Bridge {
   std::optional<std::string> refuse_unknown_serial(CommandUnderCheck& check);
   std::optional<std::string> refuse_offline(CommandUnderCheck& check);
   std::optional<std::string> refuse_contested(CommandUnderCheck& check);
+  std::optional<std::string> refuse_online_elsewhere(CommandUnderCheck& check);
   std::optional<std::string> refuse_baud_change(CommandUnderCheck& check);
   std::optional<std::string> translate(CommandUnderCheck& check);
   std::optional<std::string> refuse_in_boot_code(CommandUnderCheck& check);
@@ -182,6 +194,7 @@ class Bridge {
   can::Bus& bus_;
   Sink& sink_;
   const std::shared_ptr<const Clock> clock_;
+  const OtherGateways* const others_;
 
   mutable std::mutex mutex_;
   directory::ValveDirectory directory_;

@@ -39,6 +39,9 @@ struct ValveRow {
   // Its gateway vanished (its writers' liveliness lapsed, or it left): what the row says is the
   // last word, and whether the valve is online is unknown.
   bool gateway_lost = false;
+  // Other gateways, alive, that report this serial online on their own bus: two valves carry
+  // one serial, or something replays it. The gateways refuse its commands meanwhile.
+  std::vector<std::string> also_reported_by;
   std::set<ErrorKind> errors;                           // latched, until Clear Errors
   std::map<std::string, Reply, std::less<>> telemetry;  // by subject, the latest of each
 
@@ -104,16 +107,27 @@ class ValveTable {
   bool empty() const { return rows_.empty() && gateways_.empty(); }
 
  private:
-  // Telemetry may arrive before presence; such a row stays hidden until presence arrives.
+  // One gateway's word on a valve: its latest presence, and when it came (a count).
+  struct Report {
+    ValvePresence presence;
+    std::string participant;
+    std::uint64_t order = 0;
+  };
+  // Telemetry may arrive before presence; such a row stays hidden until presence arrives. A
+  // serial is one DDS instance whoever publishes it: each gateway's report is kept apart, so
+  // that one gateway's "offline" never hides another's "online".
   struct Entry {
-    ValveRow row;
-    bool present = false;
+    ValveRow row;                           // telemetry and errors; the rest comes from reports
+    std::map<std::string, Report> reports;  // by participant (by gateway name when unknown)
   };
   Entry& entry(std::uint32_t serial);
   bool lost(const std::string& participant) const;  // its writers lapsed or left
-  ValveRow shown(const ValveRow& row) const;        // with gateway_lost filled in
+  // The row as shown: from the latest report of a live gateway that says online, else from the
+  // latest report; gateway_lost and also_reported_by filled in.
+  ValveRow shown(const Entry& entry) const;
 
   std::map<std::uint32_t, Entry> rows_;
+  std::uint64_t reports_ = 0;
   std::map<std::string, GatewaySummary> gateways_;
   std::size_t gateways_matched_ = 0;
   std::set<std::string> lost_participants_;

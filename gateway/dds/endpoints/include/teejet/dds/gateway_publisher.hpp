@@ -97,6 +97,10 @@ class GatewayPublisher final : public bridge::Sink {
   // were acknowledged.
   bool wait_for_statuses(Duration timeout);
 
+  // What the other gateways report (nullptr when their status cannot be read): for the bridge,
+  // which refuses commands to a serial that another gateway reports online too.
+  const bridge::OtherGateways* other_gateways() const { return peers_.get(); }
+
   // Deletes the reader of the other gateways' status. Call it before the participant goes,
   // which deletes the writers by itself but cannot be asked to delete a reader afterwards.
   void stop_hearing_peers() { peers_.reset(); }
