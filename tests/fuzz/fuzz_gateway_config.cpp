@@ -47,6 +47,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   FUZZ_CHECK(config->domain >= 0 && config->domain <= teejet::dds::kMaxDomain, "domain");
   FUZZ_CHECK(config->receive_coalesce >= 0us && config->receive_coalesce <= 10'000us,
              "receive_coalesce_us");
+  FUZZ_CHECK(config->receive_coalesce_above <= 10'000, "receive_coalesce_above_fps");
   const auto& bridge = config->bridge;
   check_duration(bridge.offline_after, "gateway.offline_after_s");
   check_duration(bridge.reply_timeout, "commands.reply_timeout_s");

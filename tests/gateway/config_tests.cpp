@@ -28,7 +28,8 @@ TEST(GatewayConfig, EmptyFileKeepsTheDefaults) {
   EXPECT_EQ(config.bridge.offline_after, 3s);
   EXPECT_TRUE(config.stop_valves_on_exit);
   EXPECT_FALSE(config.bridge.allow_baud_change);
-  EXPECT_EQ(config.receive_coalesce, 0ms);
+  EXPECT_EQ(config.receive_coalesce, 4ms);
+  EXPECT_EQ(config.receive_coalesce_above, 3000u);  // a full 500 kbit/s bus only
   EXPECT_EQ(config.bridge.poll.size(), 9u);
 }
 
@@ -42,6 +43,8 @@ TEST(GatewayConfig, TheShippedExampleParsesAndMatchesTheDefaults) {
   EXPECT_EQ(config.bridge.offline_after, defaults.bridge.offline_after);
   EXPECT_EQ(config.bridge.poll, bridge::default_poll_schedule());
   EXPECT_EQ(config.bridge.reply_timeout, defaults.bridge.reply_timeout);
+  EXPECT_EQ(config.receive_coalesce, defaults.receive_coalesce);
+  EXPECT_EQ(config.receive_coalesce_above, defaults.receive_coalesce_above);
   ASSERT_TRUE(config.bridge.default_limits);
   EXPECT_EQ(config.bridge.default_limits->opened_degrees, 90.0);
   EXPECT_TRUE(config.bridge.limits.at(3).full_turn());
@@ -50,7 +53,8 @@ TEST(GatewayConfig, TheShippedExampleParsesAndMatchesTheDefaults) {
 TEST(GatewayConfig, EveryKeyIsRead) {
   const auto config = parse(R"(
 gateway: {name: boom-left, can: vcan0, domain: 7, offline_after_s: 1.5, stop_valves_on_exit: false,
-          on_commander_lost: ignore, allow_baud_change: true, receive_coalesce_us: 2000}
+          on_commander_lost: ignore, allow_baud_change: true, receive_coalesce_us: 2000,
+          receive_coalesce_above_fps: 0}
 commands: {completion_tolerance_deg: 0.5, reply_timeout_s: 1, move_margin_s: 2, assumed_dps: 45}
 simulator: {first_serial: TJV000101, dps: 30, closed_deg: 10, opened_deg: 80}
 )");
@@ -62,6 +66,7 @@ simulator: {first_serial: TJV000101, dps: 30, closed_deg: 10, opened_deg: 80}
   EXPECT_EQ(config.on_commander_lost, OnCommanderLost::kIgnore);
   EXPECT_TRUE(config.bridge.allow_baud_change);
   EXPECT_EQ(config.receive_coalesce, 2ms);
+  EXPECT_EQ(config.receive_coalesce_above, 0u);
   EXPECT_EQ(config.bridge.completion_tolerance_degrees, 0.5);
   EXPECT_EQ(config.bridge.reply_timeout, 1s);
   EXPECT_EQ(config.bridge.move_margin, 2s);
@@ -94,10 +99,11 @@ TEST(GatewayConfig, DurationsShorterThanOneNanosecondAreRefused) {
 }
 
 TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
-  EXPECT_EQ(error_of("gateway:\n  nmae: x\n"),
-            "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "
-            "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change, "
-            "receive_coalesce_us, reject_unknown_serials, record_frames)");
+  EXPECT_EQ(
+      error_of("gateway:\n  nmae: x\n"),
+      "test.yaml:2: gateway: unknown key 'nmae' (name, can, domain, profile, "
+      "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change, "
+      "receive_coalesce_us, receive_coalesce_above_fps, reject_unknown_serials, record_frames)");
   EXPECT_EQ(error_of("polling: {}\n"),
             "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, valves, "
             "simulator)");
@@ -107,6 +113,9 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
             "test.yaml:1: gateway.on_commander_lost: 'panic' is not 'stop' or 'ignore'");
   EXPECT_EQ(error_of("gateway: {receive_coalesce_us: 20000}"),
             "test.yaml:1: gateway.receive_coalesce_us: 20000 is not a whole number from 0 to "
+            "10000");
+  EXPECT_EQ(error_of("gateway: {receive_coalesce_above_fps: -1}"),
+            "test.yaml:1: gateway.receive_coalesce_above_fps: -1 is not a whole number from 0 to "
             "10000");
   EXPECT_EQ(error_of("gateway: {offline_after_s: 0}"),
             "test.yaml:1: gateway.offline_after_s: 0 s is outside the allowed range: more than 0, "

@@ -104,7 +104,7 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
   reader.expect_keys(g, "gateway",
                      {"name", "can", "domain", "profile", "offline_after_s", "stop_valves_on_exit",
                       "on_commander_lost", "allow_baud_change", "receive_coalesce_us",
-                      "reject_unknown_serials", "record_frames"});
+                      "receive_coalesce_above_fps", "reject_unknown_serials", "record_frames"});
   if (g["name"]) config.bridge.gateway_name = reader.scalar(g["name"], "gateway.name");
   if (g["can"]) config.can = reader.scalar(g["can"], "gateway.can");
   if (g["domain"]) {
@@ -140,6 +140,10 @@ void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& conf
   if (g["receive_coalesce_us"]) {
     config.receive_coalesce = std::chrono::microseconds(
         reader.integer(g["receive_coalesce_us"], "gateway.receive_coalesce_us", 0, 10'000));
+  }
+  if (g["receive_coalesce_above_fps"]) {
+    config.receive_coalesce_above = static_cast<unsigned>(reader.integer(
+        g["receive_coalesce_above_fps"], "gateway.receive_coalesce_above_fps", 0, 10'000));
   }
 }
 

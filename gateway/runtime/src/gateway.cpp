@@ -20,6 +20,32 @@ constexpr std::size_t kReceiveBatch = 64;
 // Batches taken without waiting before a deadline is kept: a backlog of 8 x 64 frames is longer
 // than a 32-valve bus's burst of replies.
 constexpr int kBatchesBeforeDeadlines = 8;
+// How long the bus reader counts frames before it judges the bus busy enough to coalesce.
+constexpr Duration kRatePeriod = 100ms;
+
+// Whether the bus carried at least `above` frames a second over the last period counted
+// (above 0: always). A quiet spell ends the busy judgement with the first frame after it.
+class BusRate {
+ public:
+  BusRate(unsigned above, SteadyTime now) : above_(above), since_(now), busy_(above == 0) {}
+
+  void count(std::size_t frames, SteadyTime now) {
+    counted_ += frames;
+    const Duration elapsed = now - since_;
+    if (elapsed < kRatePeriod) return;
+    busy_ = above_ == 0 || static_cast<double>(counted_) >=
+                               above_ * std::chrono::duration<double>(elapsed).count();
+    counted_ = 0;
+    since_ = now;
+  }
+  bool busy() const { return busy_; }
+
+ private:
+  const unsigned above_;
+  SteadyTime since_;
+  std::size_t counted_ = 0;
+  bool busy_;
+};
 
 }  // namespace
 
@@ -138,13 +164,15 @@ Duration Gateway::until(SteadyTime deadline) const {
 }
 
 // Frames are taken in bursts: one wake-up and one look at the deadlines per burst. On a busy
-// bus (frames closer together than the coalescing window) the reader lets the next burst
-// gather for the window instead of waking for every frame: at a full 500 kbit/s bus a wake-up
-// costs this 2-vCPU machine more than decoding and publishing the frame it brings.
+// bus (at least receive_coalesce_above frames a second, frames closer together than the
+// coalescing window) the reader lets the next burst gather for the window instead of waking for
+// every frame: at a full 500 kbit/s bus a wake-up costs this 2-vCPU machine more than decoding
+// and publishing the frame it brings. Below that rate no frame waits.
 void Gateway::read_bus(std::stop_token stop) {
   std::vector<can::TimedFrame> frames;
   frames.reserve(kReceiveBatch);
   const Duration window = config_.receive_coalesce;
+  BusRate rate(config_.receive_coalesce_above, clock_->steady());
   bool busy = false;
   SteadyTime last_batch{};
   while (!stop.stop_requested()) {
@@ -157,6 +185,7 @@ void Gateway::read_bus(std::stop_token stop) {
         if (backend_.bus->receive_batch(frames, kReceiveBatch, std::chrono::milliseconds(0)) == 0) {
           break;
         }
+        rate.count(frames.size(), clock_->steady());
         bridge_->on_frames(frames);
       }
       bridge_->tick();
@@ -179,7 +208,9 @@ void Gateway::read_bus(std::stop_token stop) {
     // Busy while each window brings frames or they come closer together than the window. A
     // full batch means more are waiting: take them at once.
     const SteadyTime now = clock_->steady();
-    busy = taken < kReceiveBatch && (busy || now - last_batch < window);
+    rate.count(taken, now);
+    busy = window > Duration{0} && rate.busy() && taken < kReceiveBatch &&
+           (busy || now - last_batch < window);
     last_batch = now;
     bridge_->on_frames(frames);
   }
