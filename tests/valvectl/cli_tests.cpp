@@ -114,6 +114,27 @@ TEST(ValvectlCommandLine, StopTakesOneSerialOrAll) {
   EXPECT_NE(usage_error({"stop", "42", "--all"}).find("SERIAL or --all"), std::string::npos);
 }
 
+// Moving every section of a boom is what a person does: move, stop, jog and clear-errors take
+// --all, and --gateway narrows it to one gateway's bus.
+TEST(ValvectlCommandLine, MoveJogAndClearErrorsTakeAllAndAGateway) {
+  const auto boom = command_of({"move", "--all", "--gateway", "rig-2", "--to", "20"});
+  EXPECT_EQ(boom.command.kind(), COMMAND_TARGET_DEGREES);
+  EXPECT_TRUE(boom.every_online_valve);
+  EXPECT_EQ(boom.only_gateway, "rig-2");
+  EXPECT_TRUE(boom.serials.empty());
+  EXPECT_TRUE(command_of({"jog", "--all", "--ms", "100"}).every_online_valve);
+  EXPECT_TRUE(command_of({"clear-errors", "--all"}).every_online_valve);
+  EXPECT_EQ(command_of({"stop", "--all", "--gateway", "rig-1"}).only_gateway, "rig-1");
+  EXPECT_NE(usage_error({"move", "--to", "20"}).find("move: give either a SERIAL or --all"),
+            std::string::npos);
+  EXPECT_NE(usage_error({"move", "5", "--gateway", "rig-2", "--to", "20"})
+                .find("move: --gateway selects valves for --all"),
+            std::string::npos);
+  // A manual drive runs until told otherwise: one valve at a time.
+  EXPECT_NE(usage_error({"manual", "--all", "--speed", "40"}).find("SERIAL is required"),
+            std::string::npos);
+}
+
 TEST(ValvectlCommandLine, ManualNeedsSpeedAndOpenOrClose) {
   const auto manual = command_of({"manual", "5", "--speed", "40", "--direction", "close"});
   EXPECT_EQ(manual.command.kind(), COMMAND_MANUAL);

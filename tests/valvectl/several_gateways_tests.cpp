@@ -10,6 +10,7 @@
 #include <fstream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -169,6 +170,36 @@ TEST_F(SeveralGateways, ASerialOnlineOnTwoGatewaysIsReportedByBothAndItsCommands
   const auto moved = valvectl({"--timeout", "30", "move", "TJV100002", "--to", "30", "--wait"});
   EXPECT_EQ(moved.exit_code, kExitOk) << describe(moved);
   EXPECT_TRUE(contains(moved.out, ": COMPLETED")) << describe(moved);
+  // The gateways no longer count rig-5 (gateways_seen): a client meets the four left and knows
+  // it met them all, instead of waiting its whole timeout for a fifth.
+  const auto unknown = valvectl({"--timeout", "30", "move", "TJV999999", "--to", "10"});
+  EXPECT_EQ(unknown.exit_code, kExitNotFound) << describe(unknown);
+  EXPECT_TRUE(contains(unknown.err, "is not known to any of the 4 gateway(s)"))
+      << describe(unknown);
+}
+
+// One boom at once: every online valve of rig-2, one command each, each with one final status;
+// the other gateways' valves are left alone.
+TEST_F(SeveralGateways, MoveAllOfOneGatewayMovesEachOfItsValvesOnce) {
+  const auto moved =
+      valvectl({"--timeout", "30", "move", "--all", "--gateway", "rig-2", "--to", "33", "--wait"});
+  EXPECT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  EXPECT_EQ(count_of(moved.out, ": COMPLETED"), 4u) << describe(moved);
+  for (int valve = 1; valve <= kValvesPerGateway; ++valve) {
+    const auto serial = codec::format_serial(serial_of(2, valve));
+    std::istringstream lines(moved.out);
+    int completed = 0;
+    for (std::string line; std::getline(lines, line);) {
+      completed += contains(line, serial + " target_degrees #") && contains(line, ": COMPLETED");
+    }
+    EXPECT_EQ(completed, 1) << serial << ": " << describe(moved);
+  }
+  EXPECT_FALSE(contains(moved.out, "TJV1000")) << describe(moved);
+  EXPECT_FALSE(contains(moved.out, "TJV3000")) << describe(moved);
+
+  const auto nobody = valvectl({"move", "--all", "--gateway", "rig-9", "--to", "33"});
+  EXPECT_EQ(nobody.exit_code, kExitNotFound) << describe(nobody);
+  EXPECT_TRUE(contains(nobody.err, "no gateway called \"rig-9\" on domain")) << describe(nobody);
 }
 
 // Last: it kills rig-4. A gateway SIGKILLed (a crash, a cut cable) used to look alive for good:

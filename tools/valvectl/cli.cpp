@@ -40,6 +40,7 @@ struct RawArguments {
   unsigned every_tenths = 0;
   std::uint32_t bit_rate = 0;
   bool all = false;
+  std::string gateway;
   bool baud_request = false;
   bool wait = false;
   double wait_timeout_seconds = 60.0;
@@ -116,6 +117,14 @@ void add_serial(CLI::App* subcommand, RawArguments& raw, bool required = true) {
       ->required(required);
 }
 
+// SERIAL, or --all [--gateway NAME]: what a person does to a whole boom.
+void add_serial_or_all(CLI::App* subcommand, RawArguments& raw) {
+  add_serial(subcommand, raw, /*required=*/false);
+  subcommand->add_flag("--all", raw.all, "every online valve of every gateway, one command each");
+  subcommand->add_option("--gateway", raw.gateway,
+                         "with --all: only the valves of the gateway of this name (one boom)");
+}
+
 void add_wait(Parser& parser, CLI::App* subcommand, const char* what) {
   subcommand->add_flag("--wait", parser.raw.wait, what);
   subcommand
@@ -185,15 +194,14 @@ void define(Parser& parser) {
                            "a line above the table on every refresh (e.g. a dashboard's URL)");
 
   parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
-  add_serial(parser.move, raw);
+  add_serial_or_all(parser.move, raw);
   parser.move->add_option("--to", raw.degrees, "target position in degrees, 0 to 359.9")
       ->required();
   add_drive(parser.move, raw, /*required=*/false, /*shortest=*/true);
   add_wait(parser, parser.move, "show the position until the move completes");
 
   parser.stop = app.add_subcommand("stop", "stop a valve, or every online valve with --all");
-  add_serial(parser.stop, raw, /*required=*/false);
-  parser.stop->add_flag("--all", raw.all, "every online valve of every gateway");
+  add_serial_or_all(parser.stop, raw);
   add_wait(parser, parser.stop, "wait until each stop is completed");
 
   parser.manual =
@@ -202,7 +210,7 @@ void define(Parser& parser) {
   add_drive(parser.manual, raw, /*required=*/true, /*shortest=*/false);
 
   parser.jog = app.add_subcommand("jog", "drive a valve for a time (Milliseconds to Run)");
-  add_serial(parser.jog, raw);
+  add_serial_or_all(parser.jog, raw);
   parser.jog->add_option("--ms", raw.milliseconds, "run time in milliseconds, 0 to 65535")
       ->required()
       ->transform(kWholeNumber);
@@ -210,7 +218,7 @@ void define(Parser& parser) {
   add_wait(parser, parser.jog, "wait until the run time is over");
 
   parser.clear_errors = app.add_subcommand("clear-errors", "clear a valve's latched errors");
-  add_serial(parser.clear_errors, raw);
+  add_serial_or_all(parser.clear_errors, raw);
   add_wait(parser, parser.clear_errors, "wait until the clear is completed");
 
   parser.request = app.add_subcommand("request", "ask a valve to send a value");
@@ -273,9 +281,16 @@ void build_command(Parser& parser, CLI::App* used) {
   request.wait_timeout =
       seconds_option("--wait-timeout", raw.wait_timeout_seconds, kMaxWaitSeconds);
 
-  if (used == parser.stop) {
-    if (raw.all == !raw.serial.empty()) usage_error("stop: give either a SERIAL or --all");
+  if (used == parser.move || used == parser.stop || used == parser.jog ||
+      used == parser.clear_errors) {
+    if (raw.all == !raw.serial.empty()) {
+      usage_error(request.subcommand + ": give either a SERIAL or --all");
+    }
+    if (!raw.gateway.empty() && !raw.all) {
+      usage_error(request.subcommand + ": --gateway selects valves for --all");
+    }
     request.every_online_valve = raw.all;
+    request.only_gateway = raw.gateway;
   }
   if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
 

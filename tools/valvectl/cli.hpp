@@ -39,7 +39,8 @@ struct WatchOptions {
 struct CommandRequest {
   std::string subcommand;                         // "move", for messages
   std::vector<std::uint32_t> serials;             // the valves named on the command line
-  bool every_online_valve = false;                // stop --all
+  bool every_online_valve = false;                // --all (move, stop, jog, clear-errors)
+  std::string only_gateway;                       // with --all: only this gateway's valves
   ValveCommand command;                           // serial, command_id and origin are set per send
   bool wait = false;                              // follow each command to its final status
   std::chrono::milliseconds wait_timeout{60000};  // backstop when no final status arrives

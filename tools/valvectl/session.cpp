@@ -196,11 +196,25 @@ class Session {
         complain("no gateway found on " + domain_text());
         return kExitNotFound;
       }
+      const std::string& only = request.only_gateway;
+      if (!only.empty()) {
+        const auto gateways = table.gateways();
+        if (std::none_of(gateways.begin(), gateways.end(),
+                         [&](const GatewaySummary& gateway) { return gateway.name == only; })) {
+          complain("no gateway called \"" + only + "\" on " + domain_text() + " (met " +
+                   std::to_string(gateways.size()) + ")");
+          return kExitNotFound;
+        }
+      }
       std::vector<std::uint32_t> online;
       for (const ValveRow& row : table.rows()) {
-        if (row.online) online.push_back(row.serial);
+        if (row.online && !row.gateway_lost && (only.empty() || row.gateway == only)) {
+          online.push_back(row.serial);
+        }
       }
-      if (online.empty()) complain("no valve is online on " + domain_text());
+      if (online.empty()) {
+        complain("no valve is online on " + (only.empty() ? domain_text() : "gateway " + only));
+      }
       return online;
     }
     for (const std::uint32_t serial : request.serials) {

@@ -44,7 +44,7 @@ PeerGateways::~PeerGateways() { participant_.delete_reader(reader_); }
 std::uint32_t PeerGateways::count() const {
   std::lock_guard lock(mutex_);
   std::set<std::string> names{own_name_};
-  for (const auto& [instance, name] : alive_) names.insert(name);
+  for (const auto& [writer, other] : others_) names.insert(other.name);
   return static_cast<std::uint32_t>(names.size());
 }
 
@@ -82,11 +82,12 @@ void PeerGateways::on_data_available(DataReader* reader) {
       if (!sample_info.valid_data) {
         // Its writers are gone (lease expired, or the gateway left): no longer heard.
         if (sample_info.instance_state != ALIVE_INSTANCE_STATE) {
-          alive_.erase(sample_info.instance_handle);
+          std::erase_if(others_, [&](const auto& other) {
+            return other.second.instance == sample_info.instance_handle;
+          });
         }
         continue;
       }
-      alive_[sample_info.instance_handle] = sample.gateway().to_string();
       const auto writer = iHandle2GUID(sample_info.publication_handle);
       const std::set<std::uint32_t> online(sample.serials_online().begin(),
                                            sample.serials_online().end());
@@ -94,7 +95,7 @@ void PeerGateways::on_data_available(DataReader* reader) {
         own_online_ = online;
         continue;
       }
-      others_[writer] = Other{sample.gateway().to_string(), online};
+      others_[writer] = Other{sample.gateway().to_string(), sample_info.instance_handle, online};
       if (sample.gateway().to_string() == own_name_ &&
           namesakes_.insert(writer.guidPrefix).second) {
         new_namesakes.push_back(writer.guidPrefix);

@@ -36,7 +36,8 @@ class PeerGateways final : public eprosima::fastdds::dds::DataReaderListener,
   PeerGateways(const PeerGateways&) = delete;
   PeerGateways& operator=(const PeerGateways&) = delete;
 
-  // Gateways whose status instance is alive, this one included: at least 1.
+  // Gateways whose status writer is alive, this one included: at least 1. A writer that left,
+  // lapsed or saw its instance disposed is no longer counted.
   std::uint32_t count() const;
 
   std::vector<std::string> reporting_online(std::uint32_t serial) const override;
@@ -74,12 +75,12 @@ class PeerGateways final : public eprosima::fastdds::dds::DataReaderListener,
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
 
   mutable std::mutex mutex_;
-  std::map<eprosima::fastrtps::rtps::InstanceHandle_t, std::string> alive_;  // by instance
-  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> namesakes_;               // each logged once
-  std::set<std::uint32_t> own_online_;  // from this gateway's own status
-  // The other gateways' writers of status, each with its name and online serials.
+  std::set<eprosima::fastrtps::rtps::GuidPrefix_t> namesakes_;  // each logged once
+  std::set<std::uint32_t> own_online_;                          // from this gateway's own status
+  // The other gateways' writers of status, each with its name, instance and online serials.
   struct Other {
     std::string name;
+    eprosima::fastrtps::rtps::InstanceHandle_t instance;
     std::set<std::uint32_t> online;
   };
   std::map<eprosima::fastrtps::rtps::GUID_t, Other> others_;
