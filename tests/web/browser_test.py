@@ -181,6 +181,14 @@ def read_only_page(driver):
     open_page(driver, READONLY_PORT)
     mode = driver.find_element(By.ID, "mode").text
     check(mode == "read-only", f"mode badge: {mode!r}, not 'read-only'")
+    # A healthy gateway is one folded line: eight fit beside the plot.
+    panels = eventually(lambda: driver.execute_script("""
+      return [...document.querySelectorAll('#gateway-list details.gateway')].map(
+          p => ({open: p.open, line: p.querySelector('summary').textContent}));"""), 15,
+                        "one folded gateway line saying 4/4 online",
+                        ok=lambda seen: len(seen) == 1 and "4/4 online" in seen[0]["line"])
+    check(not panels[0]["open"] and "error_active" in panels[0]["line"],
+          f"the gateway's line: {panels}")
     controls = driver.execute_script("""
       return [...document.querySelectorAll(
           '.cmd, button, form, #stop-all, #token, input:not(.plot-pick), ' +

@@ -383,11 +383,15 @@
 
   // ---- gateways ------------------------------------------------------------------------------
 
+  // One line per gateway (name, bus state, valves online), its counters folded under it: eight
+  // gateways fit beside the plot. A gateway that needs a look (lost, bus not error-active)
+  // unfolds by itself once; the person folds it again.
   function showGateway(g) {
     let panel = gateways.get(g.gateway);
     if (!panel) {
       $("gateway-list").querySelector(".empty")?.remove();
-      panel = el("div", { class: "gateway", "data-gateway": g.gateway });
+      panel = el("details", { class: "gateway", "data-gateway": g.gateway },
+                 el("summary", {}), el("table", {}));
       gateways.set(g.gateway, panel);
       const list = $("gateway-list");
       const after = [...list.children].find((c) => c.dataset.gateway > g.gateway);
@@ -395,17 +399,23 @@
     }
     const row = (label, value, attrs) => el("tr", {}, el("td", {}, label),
                                             el("td", attrs || {}, String(value)));
+    const trouble = g.lost || g.bus_state !== "error_active";
+    if (trouble && panel.dataset.trouble !== "true") panel.open = true;
+    panel.dataset.trouble = String(trouble);
     panel.dataset.lost = String(g.lost);
-    panel.replaceChildren(
-      el("h3", { class: "hint" }, `${g.gateway} on ${g.can_interface}`,
-         g.lost ? el("span", { class: "lost" }, " · LOST (no word from it)") : ""),
-      el("table", {},
+    panel.querySelector("summary").replaceChildren(
+      el("span", { class: "gateway-name" }, g.gateway),
+      el("span", { class: "bus-state", "data-state": g.bus_state }, g.bus_state),
+      el("span", { class: "gateway-valves" }, `${g.valves_online}/${g.valves_known} online`),
+      g.lost ? el("span", { class: "lost" }, "LOST (no word from it)") : "");
+    panel.querySelector("table").replaceChildren(
+         row("interface", g.can_interface),
          row("bus state", g.bus_state, { class: "bus-state", "data-state": g.bus_state }),
          row("tx / rx errors", `${g.tx_errors} / ${g.rx_errors}`),
          row("frames in / out", `${g.frames_in} / ${g.frames_out}`),
          row("decode errors", g.decode_errors),
          row("dropped", g.rx_dropped),
-         row("valves online / known", `${g.valves_online} / ${g.valves_known}`)));
+         row("valves online / known", `${g.valves_online} / ${g.valves_known}`));
   }
 
   // ---- plot ----------------------------------------------------------------------------------
