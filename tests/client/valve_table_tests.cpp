@@ -19,6 +19,14 @@ GatewayStatus gateway_status(const std::string& name, std::uint32_t known) {
   return s;
 }
 
+// Gateways "a" (participant 01.0f.aa) and "b" (01.0f.bb), knowing that many valves each.
+ValveTable two_gateways(std::uint32_t a_knows, std::uint32_t b_knows) {
+  ValveTable table;
+  table.on_gateway_status(gateway_status("a", a_knows), "01.0f.aa");
+  table.on_gateway_status(gateway_status("b", b_knows), "01.0f.bb");
+  return table;
+}
+
 TEST(ValvectlTable, TelemetryBeforePresenceStaysHiddenUntilThePresenceArrives) {
   ValveTable table;
   table.on_telemetry(1, codec::Position{12.3}, 10);
@@ -95,9 +103,7 @@ TEST(ValvectlTable, AValveRowNamesTheParticipantThatPublishesIt) {
 }
 
 TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBack) {
-  ValveTable table;
-  table.on_gateway_status(gateway_status("a", 2), "01.0f.aa");
-  table.on_gateway_status(gateway_status("b", 1), "01.0f.bb");
+  ValveTable table = two_gateways(2, 1);
   table.on_presence(presence(1, true, "a"), "01.0f.aa");
   table.on_presence(presence(2, true, "b"), "01.0f.bb");
   table.on_participant_liveliness("01.0f.aa", false);
@@ -114,9 +120,7 @@ TEST(ValvectlTable, AValveOfALostGatewayIsNeitherOnlineNorCountedUntilItComesBac
 // One DDS instance per serial, whoever publishes it: two gateways reporting one serial online
 // (two valves with one serial, or a replay) are both kept, never one hiding the other.
 TEST(ValvectlTable, ASerialTwoGatewaysReportOnlineNamesTheOtherUntilOneSaysOfflineOrIsLost) {
-  ValveTable table;
-  table.on_gateway_status(gateway_status("a", 1), "01.0f.aa");
-  table.on_gateway_status(gateway_status("b", 1), "01.0f.bb");
+  ValveTable table = two_gateways(1, 1);
   table.on_presence(presence(1, true, "a"), "01.0f.aa");
   table.on_presence(presence(1, true, "b"), "01.0f.bb");
   EXPECT_EQ(table.row(1)->gateway, "b");
