@@ -56,7 +56,7 @@ TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
       {"gateway", "gw"},        {"gateway_lost", false},
       {"target", 90.0},         {"amps", 0.35},
       {"speed_percent", 80},    {"direction", "open"},
-      {"telemetry", telemetry},
+      {"telemetry", telemetry}, {"also_reported_by", json::array()},
   };
   EXPECT_EQ(valves_json(table, {{1, 90.0}}), json::array({expected}));
 }

@@ -28,12 +28,12 @@ Result<std::unique_ptr<PeerGateways>> PeerGateways::create(
       new PeerGateways(participant, std::move(own_name), own_writer));
   auto topic = topics::topic_of<GatewayStatus>(participant);
   if (!topic) return topic.error();
-  // A writer that left or lapsed takes its serials with it, although the instance (the name)
-  // may live on in a namesake.
+  // A writer that left (or whose participant's lease expired: killed, cut off) takes its
+  // serials with it, although the instance (the name) may live on in a namesake. Not a lapse of
+  // its liveliness alone: on a loaded machine that comes and goes, and the count with it.
   auto reader =
-      participant.reader(*topic, topics::liveliness_reader_qos(), peers.get(),
-                         StatusMask::data_available() << StatusMask::liveliness_changed()
-                                                      << StatusMask::subscription_matched());
+      participant.reader(*topic, topics::state_reader_qos(), peers.get(),
+                         StatusMask::data_available() << StatusMask::subscription_matched());
   if (!reader) return reader.error();
   peers->reader_ = *reader;
   return peers;
@@ -82,8 +82,9 @@ void PeerGateways::on_data_available(DataReader* reader) {
       if (!sample_info.valid_data) {
         // Its writers are gone (lease expired, or the gateway left): no longer heard.
         if (sample_info.instance_state != ALIVE_INSTANCE_STATE) {
-          std::erase_if(others_, [&](const auto& other) {
-            return other.second.instance == sample_info.instance_handle;
+          // Captured by name: clang before 16 cannot capture a structured binding.
+          std::erase_if(others_, [&gone = sample_info.instance_handle](const auto& other) {
+            return other.second.instance == gone;
           });
         }
         continue;
@@ -110,10 +111,6 @@ void PeerGateways::on_data_available(DataReader* reader) {
         own_name_, participant_text(prefix));
   }
   log_shared_serials();
-}
-
-void PeerGateways::on_liveliness_changed(DataReader*, const LivelinessChangedStatus& status) {
-  if (status.not_alive_count_change > 0) forget_writer(status.last_publication_handle);
 }
 
 void PeerGateways::on_subscription_matched(DataReader*, const SubscriptionMatchedStatus& status) {

@@ -36,16 +36,13 @@ class PeerGateways final : public eprosima::fastdds::dds::DataReaderListener,
   PeerGateways(const PeerGateways&) = delete;
   PeerGateways& operator=(const PeerGateways&) = delete;
 
-  // Gateways whose status writer is alive, this one included: at least 1. A writer that left,
-  // lapsed or saw its instance disposed is no longer counted.
+  // Gateways whose status writer is matched, this one included: at least 1. A writer that left,
+  // or whose participant was dropped, is no longer counted.
   std::uint32_t count() const;
 
   std::vector<std::string> reporting_online(std::uint32_t serial) const override;
 
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
-  void on_liveliness_changed(
-      eprosima::fastdds::dds::DataReader* reader,
-      const eprosima::fastdds::dds::LivelinessChangedStatus& status) override;
   void on_subscription_matched(
       eprosima::fastdds::dds::DataReader* reader,
       const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override;
