@@ -281,8 +281,8 @@ void build_command(Parser& parser, CLI::App* used) {
   request.wait_timeout =
       seconds_option("--wait-timeout", raw.wait_timeout_seconds, kMaxWaitSeconds);
 
-  if (used == parser.move || used == parser.stop || used == parser.jog ||
-      used == parser.clear_errors) {
+  // The subcommands given add_serial_or_all().
+  if (used->get_option_no_throw("--all") != nullptr) {
     if (raw.all == !raw.serial.empty()) {
       usage_error(request.subcommand + ": give either a SERIAL or --all");
     }

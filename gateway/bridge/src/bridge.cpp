@@ -537,12 +537,15 @@ void Bridge::publish_gateway_status() {
   status.frames_out(bus.frames_out);
   status.decode_errors(counters_.decode_errors);
   status.rx_dropped(bus.rx_dropped);
-  status.valves_online(static_cast<std::uint32_t>(directory_.online_count()));
-  status.valves_known(static_cast<std::uint32_t>(directory_.valves().size()));
+  // One copy of the directory for both the count and the list.
+  const auto valves = directory_.valves();
   std::vector<std::uint32_t> online;
-  for (const auto& valve : directory_.valves()) {
-    if (valve.online && online.size() < kMaxSerialsOnline) online.push_back(valve.serial);
+  for (const auto& valve : valves) {
+    if (valve.online) online.push_back(valve.serial);
   }
+  status.valves_online(static_cast<std::uint32_t>(online.size()));
+  status.valves_known(static_cast<std::uint32_t>(valves.size()));
+  if (online.size() > kMaxSerialsOnline) online.resize(kMaxSerialsOnline);
   status.serials_online(std::move(online));
   status.stamp_ns(unix_nanoseconds(clock_->wall()));
   sink_.gateway_status(status);
