@@ -212,7 +212,8 @@ TEST_F(SeveralGateways, MoveAllOfOneGatewayMovesEachOfItsValvesOnce) {
 }
 
 // Last: it kills rig-4. A gateway SIGKILLed (a crash, a cut cable) used to look alive for good:
-// every valve online, frozen where it was. Its state writers' liveliness lapses 3 s after.
+// every valve online, frozen where it was. Its state writers' liveliness lapses 3 s after; when
+// the watch joined too lately to have seen it asserted, its writers unmatch at its lease's end.
 TEST_F(SeveralGateways, AGatewayKilledWithoutAWordIsShownLostWithItsValvesUnknown) {
   Subprocess watch(valvectl_argv({"--json", "watch", "--interval", "200"}));
   const auto watched = serial_of(4, 1);

@@ -61,12 +61,13 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
   if (view->failure_) return *view->failure_;
   // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
   // that arrived before a reader had its listener are taken right after. Gateway status also
-  // tells when a gateway's writers lost their liveliness.
+  // tells when a gateway's writers lost their liveliness or left.
   for (const auto& [reader, handler] : view->handlers_) {
+    using eprosima::fastdds::dds::StatusMask;
     const auto mask = reader == view->gateway_status_reader_
-                          ? eprosima::fastdds::dds::StatusMask::data_available()
-                                << eprosima::fastdds::dds::StatusMask::liveliness_changed()
-                          : eprosima::fastdds::dds::StatusMask::data_available();
+                          ? StatusMask::data_available() << StatusMask::liveliness_changed()
+                                                         << StatusMask::subscription_matched()
+                          : StatusMask::data_available();
     reader->set_listener(view.get(), mask);
   }
   for (const auto& [reader, handler] : view->handlers_) handler(reader);
@@ -146,6 +147,14 @@ void ValveView::on_liveliness_changed(
   if (!back && !gone) return;
   std::lock_guard lock(mutex_);
   table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle), back);
+  changed_.notify_all();
+}
+
+void ValveView::on_subscription_matched(
+    DataReader* /*reader*/, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
+  if (status.current_count_change >= 0) return;
+  std::lock_guard lock(mutex_);
+  table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle), false);
   changed_.notify_all();
 }
 
