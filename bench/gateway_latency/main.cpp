@@ -89,8 +89,10 @@ int main(int argc, char** argv) {
                       "read every gateway topic meanwhile, as an ECU would");
   resources
       ->add_option("--commands-per-second", options.commands_per_second,
-                   "with --subscribe: move valves TJV000001..32 in turn at this rate")
+                   "with --subscribe: move valves TJV000001..--valves in turn at this rate")
       ->check(CLI::Range(0.0, 1000.0));
+  resources->add_option("--valves", options.moved_valves, "how many valves the ECU moves")
+      ->check(CLI::Range(1, 999999));
   resources
       ->add_option("--rss-every-s", options.rss_every_s,
                    "sample VmRSS, open fds, threads and CPU this often in the window")

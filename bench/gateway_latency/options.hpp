@@ -44,7 +44,9 @@ struct Options {
   double settle_s = 5.0;
   std::string interface;
   bool subscribe = false;
-  double commands_per_second = 0;  // Target Degrees to valves 1..32 in turn, during the window
+  // Target Degrees to valves 1..moved_valves in turn, in the window.
+  double commands_per_second = 0;
+  std::uint32_t moved_valves = 32;
   double rss_every_s = 0;  // sample RSS, fds, threads, CPU this often in the window (the soak)
   double compare_s = 0;    // compare the first and the last this many seconds of the samples
   double drain_s = 10;     // after the window, wait this long at most for the last statuses

@@ -292,8 +292,9 @@ int run_resources(const Options& options) {
       next_sample += period(options.rss_every_s);
     }
     if (options.commands_per_second > 0 && now >= next_command) {
-      // Valves 1..32 in turn, each to the other end of a 10-80 degree stroke every other time.
-      ecu->move(1 + moves % 32, (moves / 32) % 2 ? 10.0F : 80.0F);
+      // Valves in turn, each to the other end of a 10-80 degree stroke every other time.
+      const std::uint32_t valves = options.moved_valves;
+      ecu->move(1 + moves % valves, (moves / valves) % 2 ? 10.0F : 80.0F);
       ++moves;
       next_command += period(1.0 / options.commands_per_second);
     }
