@@ -75,9 +75,9 @@ Status Gateway::start() {
       {.domain = config_.domain,
        .profile_file = config_.profile_file,
        .name = config_.bridge.gateway_name,
-       .on_participant_dropped = [lost = lost_commanders_](const std::string& prefix) {
-         lost->report(prefix);
-       }});
+       .on_participant_dropped =
+           [lost = lost_commanders_](const std::string& prefix) { lost->report(prefix); },
+       .announce_to_newcomers = true});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
   auto publisher = dds::GatewayPublisher::create(*participant_, config_.bridge.gateway_name);
