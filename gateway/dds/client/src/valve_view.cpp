@@ -152,9 +152,12 @@ void ValveView::on_liveliness_changed(
 
 void ValveView::on_subscription_matched(
     DataReader* /*reader*/, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
-  if (status.current_count_change >= 0) return;
+  if (status.current_count_change == 0) return;
+  // A status writer that matches again belongs to a participant discovery found again: alive,
+  // whatever its liveliness said before (Fast DDS may report none on a rematch).
   std::lock_guard lock(mutex_);
-  table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle), false);
+  table_.on_participant_liveliness(dds::participant_of(status.last_publication_handle),
+                                   status.current_count_change > 0);
   changed_.notify_all();
 }
 

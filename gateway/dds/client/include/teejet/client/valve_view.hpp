@@ -52,7 +52,7 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
       const eprosima::fastdds::dds::LivelinessChangedStatus& status) override;
   // Gateway status only: a writer that goes before its first liveliness assertion reached this
   // reader changes no liveliness (Fast DDS never counted it alive); its unmatch, when its
-  // participant's lease ends, marks it lost instead.
+  // participant's lease ends, marks it lost instead, and a match marks it back.
   void on_subscription_matched(
       eprosima::fastdds::dds::DataReader* reader,
       const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override;
