@@ -53,6 +53,7 @@ class SeveralGateways : public ::testing::Test {
     // AValveIsCalledUnknownOnlyOnceEveryGatewayWasMet's.
     DdsPeer peer(test_domain(), "several-gateways-settle");
     auto* statuses = peer.reader<GatewayStatus>();
+    ASSERT_NE(statuses, nullptr);
     std::map<std::string, std::uint32_t> seen;
     const bool settled = eventually(
         [&] {
