@@ -62,7 +62,7 @@ std::string default_gateway_name() {
 
 // The options as given; configure() applies only those the user named (app.count()).
 struct Arguments {
-  std::string can, profile, config_file, name, log_level = "info";
+  std::string can, profile, config_file, layout_file, name, log_level = "info";
   int domain = 0;
   bool allow_baud_change = false, keep_valves_running = false, record_frames = false;
 };
@@ -76,6 +76,9 @@ void add_options(CLI::App& app, Arguments& arguments) {
   app.add_option("--profile", arguments.profile, "Fast DDS XML profile file")
       ->check(CLI::ExistingFile);
   app.add_option("-c,--config", arguments.config_file, "YAML configuration (docs/gateway.md)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--layout", arguments.layout_file,
+                 "where each valve sits (docs/layout.md); the gateway rewrites this file")
       ->check(CLI::ExistingFile);
   app.add_option("--name", arguments.name,
                  "gateway name in presence and status (default: teejet-gateway@HOST)");
@@ -103,6 +106,8 @@ teejet::Result<teejet::gateway::GatewayConfig> configure(const CLI::App& app,
   if (app.count("--domain")) config.domain = arguments.domain;
   if (app.count("--profile")) config.profile_file = arguments.profile;
   if (app.count("--name")) config.bridge.gateway_name = arguments.name;
+  if (app.count("--layout")) config.layout_file = arguments.layout_file;
+  if (auto layout = teejet::gateway::read_layout_file(config); !layout) return layout.error();
   if (arguments.allow_baud_change) config.bridge.allow_baud_change = true;
   if (arguments.keep_valves_running) config.stop_valves_on_exit = false;
   if (arguments.record_frames) config.record_frames = true;

@@ -323,7 +323,7 @@ TEST_F(BridgeTest, ANewCommandSupersedesTheRunningOne) {
 
 TEST_F(BridgeTest, DegreesFromPositionCompletesAtTheRelativeTarget) {
   auto c = config();
-  c.default_limits = ValveLimits{0.0, 90.0};
+  c.layout = *layout::Layout::make({}, layout::Mechanics{0.0, 90.0});
   Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{80.0}, kStart));
@@ -336,7 +336,8 @@ TEST_F(BridgeTest, DegreesFromPositionCompletesAtTheRelativeTarget) {
 
 TEST_F(BridgeTest, FullTurnValveWrapsRelativeTargets) {
   auto c = config();
-  c.limits[1] = ValveLimits{0.0, 360.0};
+  c.layout = *layout::Layout::make(
+      {{.name = "master", .order = 1, .serial = 1, .mechanics = layout::Mechanics{0.0, 360.0}}});
   Bridge bridge(c, gateway_bus, sink, clock);
   announce(bridge, 0xD8, 1, kStart);
   deliver(bridge, from_valve(0xD8, codec::Position{350.0}, kStart));

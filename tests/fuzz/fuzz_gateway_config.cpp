@@ -24,7 +24,7 @@ using namespace std::chrono_literals;
 
 constexpr auto kSource = "fuzz.yaml";
 
-void check_limits(const bridge::ValveLimits& limits, const std::string& where) {
+void check_limits(const layout::Mechanics& limits, const std::string& where) {
   FUZZ_CHECK(limits.closed_degrees >= 0 && limits.closed_degrees < limits.opened_degrees, where);
   FUZZ_CHECK(limits.opened_degrees <= 340 || limits.opened_degrees == 360, where);
 }
@@ -55,10 +55,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   FUZZ_CHECK(bridge.completion_tolerance_degrees >= 0 && bridge.completion_tolerance_degrees <= 45,
              "commands.completion_tolerance_deg");
   FUZZ_CHECK(bridge.assumed_dps >= 1 && bridge.assumed_dps <= 359, "commands.assumed_dps");
-  if (bridge.default_limits) check_limits(*bridge.default_limits, "valves.default");
-  for (const auto& [serial, limits] : bridge.limits) {
-    FUZZ_CHECK(serial <= 0xFFFFFF, "valve serial");
-    check_limits(limits, "valves." + codec::format_serial(serial));
+  const auto& layout = bridge.layout;
+  if (layout.default_mechanics()) check_limits(*layout.default_mechanics(), "layout.default");
+  for (const auto& location : layout.locations()) {
+    FUZZ_CHECK(layout::check_name(location.name).ok(), "layout name " + location.name);
+    FUZZ_CHECK(location.order >= 1 && location.order <= layout::kMaxOrder, "layout order");
+    FUZZ_CHECK(!location.serial || *location.serial <= 0xFFFFFF, "layout serial");
+    if (location.mechanics) check_limits(*location.mechanics, "layout." + location.name);
   }
   // Every poll entry is a request the valve understands, at most once each.
   FUZZ_CHECK(bridge.poll.size() <= 9, "poll");

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "support/eventually.hpp"
+#include "support/scratch_dir.hpp"
 #include "teejet/gateway/bus_backend.hpp"
 #include "teejet/gateway/config.hpp"
 
@@ -45,9 +46,47 @@ TEST(GatewayConfig, TheShippedExampleParsesAndMatchesTheDefaults) {
   EXPECT_EQ(config.bridge.reply_timeout, defaults.bridge.reply_timeout);
   EXPECT_EQ(config.receive_coalesce, defaults.receive_coalesce);
   EXPECT_EQ(config.receive_coalesce_above, defaults.receive_coalesce_above);
-  ASSERT_TRUE(config.bridge.default_limits);
-  EXPECT_EQ(config.bridge.default_limits->opened_degrees, 90.0);
-  EXPECT_TRUE(config.bridge.limits.at(3).full_turn());
+  const auto& layout = config.bridge.layout;
+  EXPECT_EQ(layout.default_mechanics(), (layout::Mechanics{0, 90}));
+  ASSERT_TRUE(layout.find("left-master"));
+  EXPECT_TRUE(layout.mechanics_of_serial(3)->full_turn());
+  EXPECT_EQ(config.layout_file, "");
+}
+
+TEST(GatewayConfig, ALayoutFileIsReadFromBesideTheConfigurationThatNamesIt) {
+  teejet::testing::ScratchDir dir;
+  std::ofstream(dir / "boom.yaml") << "locations:\n  - {name: section-01, order: 1, serial: 7}\n";
+  auto config =
+      parse_config("layout_file: boom.yaml\n", (dir / "gateway.yaml").string(), GatewayConfig{});
+  ASSERT_TRUE(config) << config.error().reason;
+  EXPECT_EQ(config->layout_file, (dir / "boom.yaml").string());
+  ASSERT_TRUE(read_layout_file(*config));
+  ASSERT_NE(config->bridge.layout.find_serial(7), nullptr);
+  EXPECT_EQ(config->bridge.layout.find_serial(7)->name, "section-01");
+}
+
+TEST(GatewayConfig, AMistakeInTheLayoutFileNamesThatFileAndLine) {
+  teejet::testing::ScratchDir dir;
+  const auto path = (dir / "boom.yaml").string();
+  std::ofstream(path) << "locations:\n  - {name: section-01, order: 1}\n  - {name: section-01, "
+                         "order: 2}\n";
+  GatewayConfig config;
+  config.layout_file = path;
+  const auto read = read_layout_file(config);
+  ASSERT_FALSE(read);
+  EXPECT_EQ(read.error().reason, path + ":3: layout.section-01.name: is given twice");
+  config.layout_file = (dir / "missing.yaml").string();
+  EXPECT_EQ(read_layout_file(config).error().reason,
+            "cannot read config file '" + config.layout_file + "'");
+}
+
+TEST(GatewayConfig, ALayoutInTheConfigurationAndInAFileIsRefused) {
+  auto config = parse("layout: {locations: [{name: section-01, order: 1}]}\n");
+  EXPECT_TRUE(config.layout_in_config);
+  config.layout_file = "boom.yaml";  // --layout boom.yaml
+  EXPECT_EQ(read_layout_file(config).error().reason,
+            "the layout is given twice: in the configuration (layout:) and as boom.yaml; give one "
+            "or the other");
 }
 
 TEST(GatewayConfig, EveryKeyIsRead) {
@@ -105,8 +144,8 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
       "offline_after_s, stop_valves_on_exit, on_commander_lost, allow_baud_change, "
       "receive_coalesce_us, receive_coalesce_above_fps, reject_unknown_serials, record_frames)");
   EXPECT_EQ(error_of("polling: {}\n"),
-            "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, valves, "
-            "simulator)");
+            "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, layout, "
+            "layout_file, simulator)");
   EXPECT_EQ(error_of("poll:\n  position: 300\n"),
             "test.yaml:2: poll.position: 300 is not a whole number from 0 to 255");
   EXPECT_EQ(error_of("gateway: {on_commander_lost: panic}"),
@@ -120,14 +159,22 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
   EXPECT_EQ(error_of("gateway: {offline_after_s: 0}"),
             "test.yaml:1: gateway.offline_after_s: 0 s is outside the allowed range: more than 0, "
             "at most 3600 s");
-  EXPECT_EQ(error_of("valves: {TJV12x: {opened_deg: 90}}"),
-            "test.yaml:1: valves: serial 'TJV12x' is not TJV followed by digits, nor digits alone");
-  EXPECT_EQ(error_of("valves: {default: {opened_deg: 350}}"),
-            "test.yaml:1: valves.default.opened_deg: 350 is neither 360 (full turn) nor at most "
+  EXPECT_EQ(error_of("layout: {locations: [{name: a, order: 1, serial: TJV12x}]}"),
+            "test.yaml:1: layout.a.serial: serial 'TJV12x' is not TJV followed by digits, nor "
+            "digits alone");
+  EXPECT_EQ(error_of("layout: {default: {opened_deg: 350}}"),
+            "test.yaml:1: layout.default.opened_deg: 350 is neither 360 (full turn) nor at most "
             "340 (the sheet)");
-  EXPECT_EQ(error_of("valves: {default: {closed_deg: 90}}"),
-            "test.yaml:1: valves.default.closed_deg: 90 must be at least 0 and below "
+  EXPECT_EQ(error_of("layout: {default: {closed_deg: 90}}"),
+            "test.yaml:1: layout.default.closed_deg: 90 must be at least 0 and below "
             "opened_degrees 90");
+  EXPECT_EQ(error_of("valves: {default: {opened_deg: 90}}"),
+            "test.yaml:1: valves: the mechanics of each valve are part of layout: now "
+            "(docs/layout.md): valves.default is layout.default, and a valve's go with its "
+            "location");
+  EXPECT_EQ(error_of("layout: {}\nlayout_file: boom.yaml\n"),
+            "test.yaml:2: layout_file: the layout is in this file already (layout:); give one or "
+            "the other");
   EXPECT_EQ(error_of("gateway: {domain: 1}\ngateway: {domain: 2}\n"),
             "test.yaml:2: the file: 'gateway' is given twice");
   EXPECT_NE(error_of("gateway: [unclosed").find("test.yaml: "), std::string::npos);
@@ -155,8 +202,8 @@ TEST(GatewayConfig, EveryNumberHasItsRange) {
   EXPECT_EQ(error_of("gateway: {domain: -1}"),
             "test.yaml:1: gateway.domain: -1 is not a whole number from 0 to 232");
   EXPECT_EQ(error_of("simulator: {dps: 0}"), "test.yaml:1: simulator.dps: 0 is outside 1 to 359");
-  EXPECT_EQ(error_of("valves: {default: {closed_deg: -10}}"),
-            "test.yaml:1: valves.default.closed_deg: -10 is outside 0 to 359.9");
+  EXPECT_EQ(error_of("layout: {default: {closed_deg: -10}}"),
+            "test.yaml:1: layout.default.closed_deg: -10 is outside 0 to 359.9");
   // The edges of each range are accepted.
   const auto edges = parse(
       "commands: {assumed_dps: 359, completion_tolerance_deg: 0, move_margin_s: 3600}\n"

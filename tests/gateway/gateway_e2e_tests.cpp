@@ -214,7 +214,8 @@ TEST_F(GatewayE2E, RejectionsCarryTheirReasonAndTimeoutsAreReported) {
   // configured as full-turn for this serial) never arrives and times out.
   gateway.stop();
   auto config = sim_config("gw-timeout", 1);
-  config.bridge.limits[1] = bridge::ValveLimits{0, 360};
+  config.bridge.layout = *layout::Layout::make(
+      {{.name = "master", .order = 1, .serial = 1, .mechanics = layout::Mechanics{0, 360}}});
   auto unreachable_owner = make_gateway(config);
   Gateway& unreachable = *unreachable_owner;
   start(unreachable, 1);

@@ -31,7 +31,7 @@ inline GatewayConfig sim_config(const std::string& name, int valves,
   config.sim_degrees_per_second = 180;  // quick moves keep the suites short
   config.bridge.offline_after = 1500ms;
   config.bridge.move_margin = 1s;
-  config.bridge.default_limits = bridge::ValveLimits{0, 90};
+  config.bridge.layout = *layout::Layout::make({}, layout::Mechanics{0, 90});
   return config;
 }
 

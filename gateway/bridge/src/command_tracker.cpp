@@ -96,7 +96,7 @@ void CommandTracker::sent(std::uint32_t serial, const codec::ToValveMessage& mes
   }
 
   // Target Degrees or Degrees from Position: complete when the position arrives there.
-  const ValveLimits* limits = limits_for(serial);
+  const auto limits = config_.layout.mechanics_of_serial(serial);
   tracked.target_degrees = target_of(message, valve, limits);
   // The configuration keeps assumed_dps above 0; max() keeps a bad one from dividing by zero.
   const double full_speed_dps = std::max(1u, valve.dps > 0 ? valve.dps : config_.assumed_dps);
@@ -240,10 +240,10 @@ std::optional<codec::ToValveMessage> CommandTracker::schedule_entry_replaced_by(
   return std::nullopt;
 }
 
-std::optional<double> CommandTracker::target_of(const codec::ToValveMessage& message,
-                                                const Valve& valve,
-                                                const ValveLimits* limits) const {
-  const bool limited = limits != nullptr && !limits->full_turn();
+std::optional<double> CommandTracker::target_of(
+    const codec::ToValveMessage& message, const Valve& valve,
+    const std::optional<layout::Mechanics>& limits) const {
+  const bool limited = limits && !limits->full_turn();
   const auto clamp = [&](double degrees) {
     return limited ? std::clamp(degrees, limits->closed_degrees, limits->opened_degrees)
                    : wrap(degrees);
@@ -260,14 +260,14 @@ std::optional<double> CommandTracker::target_of(const codec::ToValveMessage& mes
 }
 
 double CommandTracker::travel(const codec::ToValveMessage& message, const Valve& valve,
-                              const ValveLimits* limits) const {
+                              const std::optional<layout::Mechanics>& limits) const {
   if (const auto* relative = std::get_if<codec::DegreesFromPosition>(&message)) {
     return relative->degrees;
   }
   const auto* target = std::get_if<codec::TargetDegrees>(&message);
   if (target == nullptr || !valve.position) return 360.0;
   const double from = *valve.position;
-  if (limits != nullptr && !limits->full_turn()) {
+  if (limits && !limits->full_turn()) {
     return std::fabs(std::clamp(target->degrees, limits->closed_degrees, limits->opened_degrees) -
                      from);
   }
@@ -281,11 +281,6 @@ double CommandTracker::travel(const codec::ToValveMessage& message, const Valve&
       return dial_distance(from, target->degrees);
   }
   return 360.0;
-}
-
-const ValveLimits* CommandTracker::limits_for(std::uint32_t serial) const {
-  if (auto it = config_.limits.find(serial); it != config_.limits.end()) return &it->second;
-  return config_.default_limits ? &*config_.default_limits : nullptr;
 }
 
 }  // namespace teejet::bridge

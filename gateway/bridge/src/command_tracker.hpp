@@ -86,10 +86,9 @@ class CommandTracker {
   std::optional<codec::ToValveMessage> schedule_entry_replaced_by(
       const codec::ToValveMessage& request) const;
   std::optional<double> target_of(const codec::ToValveMessage& message, const Valve& valve,
-                                  const ValveLimits* limits) const;
+                                  const std::optional<layout::Mechanics>& limits) const;
   double travel(const codec::ToValveMessage& message, const Valve& valve,
-                const ValveLimits* limits) const;  // degrees the move covers, worst case
-  const ValveLimits* limits_for(std::uint32_t serial) const;
+                const std::optional<layout::Mechanics>& limits) const;  // worst case, degrees
 
   const BridgeConfig& config_;
   std::map<std::uint32_t, Valve> valves_;

@@ -1,10 +1,12 @@
 #include "teejet/gateway/config.hpp"
 
+#include <filesystem>
 #include <map>
 #include <sstream>
 
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/layout/layout_file.hpp"
 #include "teejet/yaml/reader.hpp"
 
 namespace teejet::gateway {
@@ -77,27 +79,6 @@ std::vector<codec::ToValveMessage> read_poll(const Reader& reader, const YAML::N
     }
   }
   return out;
-}
-
-bridge::ValveLimits read_limits(const Reader& reader, const YAML::Node& node,
-                                const std::string& section) {
-  reader.expect_keys(node, section, {"closed_deg", "opened_deg"});
-  bridge::ValveLimits limits;
-  if (node["closed_deg"]) {
-    limits.closed_degrees =
-        reader.number(node["closed_deg"], section + ".closed_deg", 0, max_position_degrees());
-  }
-  if (node["opened_deg"]) {
-    limits.opened_degrees = reader.number(node["opened_deg"], section + ".opened_deg", 0,
-                                          codec::kFullTurnOpenedDegrees);
-  }
-  if (const auto valid = codec::check_valve_limits(limits.closed_degrees, limits.opened_degrees);
-      !valid) {
-    const bool closed = valid.error().field == "closed_degrees";
-    const char* key = closed ? "closed_deg" : "opened_deg";
-    reader.fail(node[key] ? node[key] : node, section + "." + key, valid.error().complaint);
-  }
-  return limits;
 }
 
 void read_gateway(const Reader& reader, const YAML::Node& g, GatewayConfig& config) {
@@ -181,18 +162,11 @@ void read_commands(const Reader& reader, const YAML::Node& c, GatewayConfig& con
   }
 }
 
-void read_valves(const Reader& reader, const YAML::Node& v, GatewayConfig& config) {
-  reader.expect_mapping(v, "valves");
-  for (const auto& entry : v) {
-    const auto key = entry.first.Scalar();
-    if (key == "default") {
-      config.bridge.default_limits = read_limits(reader, entry.second, "valves.default");
-      continue;
-    }
-    const auto serial = codec::parse_serial(key);
-    if (!serial) reader.fail(entry.first, "valves", serial.error().reason);
-    config.bridge.limits[*serial] = read_limits(reader, entry.second, "valves." + key);
-  }
+// A relative layout_file is beside the configuration that names it.
+std::string beside(const std::string& source, const std::string& path) {
+  const std::filesystem::path file(path);
+  if (file.is_absolute()) return path;
+  return (std::filesystem::path(source).parent_path() / file).lexically_normal().string();
 }
 
 void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& config) {
@@ -250,17 +224,47 @@ void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& co
 
 Result<GatewayConfig> parse_config(const std::string& text, const std::string& source,
                                    GatewayConfig base) {
-  return yaml::parse<
-      GatewayConfig>(source, text, [&](const Reader& reader, const YAML::Node& root) {
-    if (root.IsNull()) return base;
-    reader.expect_keys(root, "the file", {"gateway", "commands", "poll", "valves", "simulator"});
-    if (const auto g = root["gateway"]) read_gateway(reader, g, base);
-    if (const auto c = root["commands"]) read_commands(reader, c, base);
-    if (const auto p = root["poll"]) base.bridge.poll = read_poll(reader, p);
-    if (const auto v = root["valves"]) read_valves(reader, v, base);
-    if (const auto s = root["simulator"]) read_simulator(reader, s, base);
-    return base;
-  });
+  return yaml::parse<GatewayConfig>(
+      source, text, [&](const Reader& reader, const YAML::Node& root) {
+        if (root.IsNull()) return base;
+        // Before the key check, which would call it unknown: it was a section until the layout.
+        if (root.IsMap() && root["valves"]) {
+          reader.fail(root["valves"], "valves",
+                      "the mechanics of each valve are part of layout: now (docs/layout.md): "
+                      "valves.default is layout.default, and a valve's go with its location");
+        }
+        reader.expect_keys(root, "the file",
+                           {"gateway", "commands", "poll", "layout", "layout_file", "simulator"});
+        if (const auto g = root["gateway"]) read_gateway(reader, g, base);
+        if (const auto c = root["commands"]) read_commands(reader, c, base);
+        if (const auto p = root["poll"]) base.bridge.poll = read_poll(reader, p);
+        if (root["layout"] && root["layout_file"]) {
+          reader.fail(root["layout_file"], "layout_file",
+                      "the layout is in this file already (layout:); give one or the other");
+        }
+        if (const auto l = root["layout"]) {
+          base.bridge.layout = layout::read_layout(reader, l, "layout");
+          base.layout_in_config = true;
+        }
+        if (const auto f = root["layout_file"]) {
+          base.layout_file = beside(source, reader.scalar(f, "layout_file"));
+        }
+        if (const auto s = root["simulator"]) read_simulator(reader, s, base);
+        return base;
+      });
+}
+
+Status read_layout_file(GatewayConfig& config) {
+  if (config.layout_file.empty()) return {};
+  if (config.layout_in_config) {
+    return Error{ErrorCode::kInvalidValue,
+                 "the layout is given twice: in the configuration (layout:) and as " +
+                     config.layout_file + "; give one or the other"};
+  }
+  auto layout = layout::load_layout_file(config.layout_file);
+  if (!layout) return layout.error();
+  config.bridge.layout = std::move(layout).value();
+  return {};
 }
 
 Result<GatewayConfig> load_config_file(const std::string& path, GatewayConfig base) {

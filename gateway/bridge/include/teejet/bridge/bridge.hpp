@@ -20,6 +20,7 @@
 #include "teejet/core/time.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/directory/valve_directory.hpp"
+#include "teejet/layout/layout.hpp"
 
 namespace teejet::bridge {
 
@@ -32,13 +33,6 @@ struct Outcome;
 // current, degrees per second, speed and direction every second; run time and cycle counts
 // every 5 s. 16.4 frames/s per valve with its I'm Here: under 1 % of a 250 kbit/s bus.
 std::vector<codec::ToValveMessage> default_poll_schedule();
-
-// Per-valve mechanics the protocol cannot report (no message sets or reads them).
-struct ValveLimits {
-  double closed_degrees = 0.0;
-  double opened_degrees = 90.0;  // 360 = a full-turn valve
-  bool full_turn() const { return opened_degrees >= 360.0; }
-};
 
 struct BridgeConfig {
   std::string gateway_name = "teejet-gateway";
@@ -57,8 +51,9 @@ struct BridgeConfig {
   // A command for a serial this gateway has never seen: REJECTED saying so, or (false, for
   // several gateways on one domain) ignored, since another gateway may own the valve.
   bool reject_unknown_serials = false;
-  std::optional<ValveLimits> default_limits;    // nullopt: limits unknown, targets not clamped
-  std::map<std::uint32_t, ValveLimits> limits;  // per serial, overrides default_limits
+  // Where each valve sits and each place's mechanics, which the protocol cannot report: a
+  // valve whose mechanics are unknown gets its targets as sent, and relative moves wrap.
+  layout::Layout layout;
 };
 
 // Where the bridge publishes. The DDS adapter implements it; tests record.

@@ -45,7 +45,11 @@ struct GatewayConfig {
   std::uint32_t sim_churn_seed = 0;
   // Long enough for the gateway to see the valve go offline, and a second to spare.
   Duration sim_churn_off_time() const { return bridge.offline_after + std::chrono::seconds(1); }
-  bridge::BridgeConfig bridge;
+  bridge::BridgeConfig bridge;  // bridge.layout: where each valve sits (docs/layout.md)
+  // The layout file, read at start (read_layout_file). Empty: the layout is the configuration's
+  // `layout:` section, or none.
+  std::string layout_file;
+  bool layout_in_config = false;  // the configuration has a `layout:` section
 };
 
 // Reads a YAML file over `base`. Unknown keys, keys given twice and values outside their range
@@ -55,5 +59,9 @@ Result<GatewayConfig> load_config_file(const std::string& path, GatewayConfig ba
 // Same, from text (for tests and error messages naming the source).
 Result<GatewayConfig> parse_config(const std::string& yaml, const std::string& source,
                                    GatewayConfig base);
+
+// Reads config.layout_file, when there is one, into config.bridge.layout; refused when the
+// configuration has a layout of its own too.
+Status read_layout_file(GatewayConfig& config);
 
 }  // namespace teejet::gateway
