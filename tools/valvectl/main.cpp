@@ -1,6 +1,5 @@
 // valvectl: lists, watches and commands TeeJet CAN valves through teejet-gateway over DDS.
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,6 +11,7 @@
 #include "cli.hpp"
 #include "exit_codes.hpp"
 #include "session.hpp"
+#include "teejet/stop_signals.hpp"
 
 // AddressSanitizer (gcc says so by a macro, clang by a feature) checks for leaks at exit.
 #if defined(__SANITIZE_ADDRESS__)
@@ -26,18 +26,6 @@ namespace {
 
 std::atomic<bool> interrupted{false};
 
-void on_signal(int) { interrupted = true; }
-
-void install_signal_handlers() {
-  struct sigaction action {};
-  action.sa_handler = on_signal;
-  sigemptyset(&action.sa_mask);
-  // A second Ctrl-C kills at once, should a wait ever not notice the first.
-  action.sa_flags = static_cast<int>(SA_RESETHAND);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -47,7 +35,8 @@ int main(int argc, char** argv) {
   std::cerr << parsed.err << std::flush;
   if (!parsed.invocation) return parsed.exit_code;
 
-  install_signal_handlers();
+  teejet::command_line::stop_on_sigint_or_sigterm(interrupted,
+                                                  teejet::command_line::SecondSignal::kEndsAtOnce);
   const int exit_code = run(*parsed.invocation, {.out = std::cout,
                                                  .err = std::cerr,
                                                  .out_is_tty = ::isatty(STDOUT_FILENO) == 1,
