@@ -34,6 +34,7 @@ BENCHMARK(ConstructCommandStatus);
 struct CountingSink final : bridge::Sink {
   std::uint64_t samples = 0;
   void presence(const ValvePresence&) override { ++samples; }
+  void location(const ValveLocation&) override { ++samples; }
   void telemetry(const dds::TelemetrySample&) override { ++samples; }
   void error_cleared(std::uint32_t, ErrorKind) override {}
   void command_status(const CommandStatus&) override {}

@@ -686,5 +686,73 @@ TEST_F(BridgeTest, AValveThatGoesQuietIsNeverDeclaredOfflineLate) {
   EXPECT_EQ(bridge.next_deadline(), start + 800ms + 1ns);
 }
 
+// ---- Where each valve sits (docs/layout.md) ------------------------------------------------
+
+layout::Layout boom_layout() {
+  return *layout::Layout::make(
+      {{.name = "left-master", .order = 1, .role = layout::Role::kMaster, .serial = 1},
+       {.name = "section-01", .order = 2, .serial = 2, .mechanics = layout::Mechanics{10, 80}},
+       {.name = "section-02", .order = 3}},
+      layout::Mechanics{0, 90});
+}
+
+TEST_F(BridgeTest, EveryLocationIsPublishedAtOnceMissingOrEmpty) {
+  auto c = config();
+  c.layout = boom_layout();
+  Bridge bridge(c, gateway_bus, sink, clock);
+  const auto places = sink.latest_locations();
+  ASSERT_EQ(places.size(), 3u);
+  const auto& master = places.at("left-master");
+  EXPECT_EQ(master.gateway().to_string(), "gw-test");
+  EXPECT_EQ(master.order(), 1u);
+  EXPECT_EQ(master.role(), ROLE_MASTER);
+  EXPECT_TRUE(master.assigned());
+  EXPECT_EQ(master.serial(), 1u);
+  EXPECT_EQ(master.state(), LOCATION_MISSING);  // never seen yet
+  EXPECT_TRUE(master.mechanics_known());
+  EXPECT_EQ(master.opened_degrees(), 90.0f);  // the default
+  const auto& section = places.at("section-01");
+  EXPECT_EQ(section.role(), ROLE_SECTION);
+  EXPECT_EQ(section.closed_degrees(), 10.0f);
+  EXPECT_EQ(section.opened_degrees(), 80.0f);
+  const auto& empty = places.at("section-02");
+  EXPECT_FALSE(empty.assigned());
+  EXPECT_EQ(empty.serial(), 0u);
+  EXPECT_EQ(empty.state(), LOCATION_EMPTY);
+}
+
+TEST_F(BridgeTest, ALocationIsOkWhileItsValveIsOnlineAndMissingOnceItIsNot) {
+  auto c = config();
+  c.layout = boom_layout();
+  c.offline_after = 3s;
+  Bridge bridge(c, gateway_bus, sink, clock);
+  announce(bridge, 0xD9, 2, kStart);
+  EXPECT_EQ(sink.latest_locations().at("section-01").state(), LOCATION_OK);
+  EXPECT_EQ(sink.last_presence(2)->sample.location().to_string(), "section-01");
+  const auto published = sink.locations().size();
+  announce(bridge, 0xD9, 2, kStart + 1s);  // nothing changed: nothing republished
+  EXPECT_EQ(sink.locations().size(), published);
+  tick_at(bridge, kStart + 1s + 3001ms);
+  EXPECT_EQ(sink.latest_locations().at("section-01").state(), LOCATION_MISSING);
+  EXPECT_EQ(sink.latest_locations().at("left-master").state(), LOCATION_MISSING);
+}
+
+TEST_F(BridgeTest, AValveInNoLocationHasNoneInItsPresence) {
+  auto c = config();
+  c.layout = boom_layout();
+  Bridge bridge(c, gateway_bus, sink, clock);
+  const auto published = sink.locations().size();
+  announce(bridge, 0xDA, 17, kStart);
+  EXPECT_EQ(sink.last_presence(17)->sample.location().to_string(), "");
+  EXPECT_EQ(sink.locations().size(), published);
+}
+
+TEST_F(BridgeTest, WithoutALayoutNoLocationIsPublished) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD8, 1, kStart);
+  EXPECT_TRUE(sink.locations().empty());
+  EXPECT_EQ(sink.last_presence(1)->sample.location().to_string(), "");
+}
+
 }  // namespace
 }  // namespace teejet::bridge

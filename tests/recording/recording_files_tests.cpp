@@ -356,10 +356,10 @@ TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
 }
 
 TEST(RecordingTopics, GlobsSelectCatalogTopicsAndRefuseStrays) {
-  EXPECT_EQ(record::select_topics({})->size(), 16u);
+  EXPECT_EQ(record::select_topics({})->size(), 17u);
   const auto valves = record::select_topics({"teejet/valve/*"});
   ASSERT_TRUE(valves.ok());
-  EXPECT_EQ(valves->size(), 14u);
+  EXPECT_EQ(valves->size(), 15u);
   EXPECT_EQ(valves->front(), "teejet/valve/presence");
   EXPECT_EQ(*record::select_topics({"*frame", "teejet/gateway/status"}),
             (std::vector<std::string>{"teejet/gateway/status", "teejet/can/frame"}));
@@ -367,7 +367,8 @@ TEST(RecordingTopics, GlobsSelectCatalogTopicsAndRefuseStrays) {
   ASSERT_FALSE(stray.ok());
   EXPECT_THAT(stray.error().reason,
               HasSubstr("--topic 'teejet/valve/postion' matches none of the teejet topics:\n"
-                        "  teejet/valve/presence\n  teejet/valve/position\n"));
+                        "  teejet/valve/presence\n  teejet/valve/location\n"
+                        "  teejet/valve/position\n"));
 }
 
 TEST(RecordingTopics, SplitFilesAreNumberedBeforeTheExtension) {

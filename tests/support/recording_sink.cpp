@@ -22,6 +22,11 @@ void RecordingSink::presence(const ValvePresence& sample) {
   presences_.push_back({sample, Clock::now()});
 }
 
+void RecordingSink::location(const ValveLocation& sample) {
+  std::lock_guard lock(mutex_);
+  locations_.push_back(sample);
+}
+
 void RecordingSink::telemetry(const dds::TelemetrySample& sample) {
   std::lock_guard lock(mutex_);
   samples_.push_back({sample, Clock::now()});
@@ -45,6 +50,19 @@ void RecordingSink::gateway_status(const GatewayStatus& status) {
 std::vector<ValvePresence> RecordingSink::presences() const {
   std::lock_guard lock(mutex_);
   return without_times(presences_);
+}
+
+std::vector<ValveLocation> RecordingSink::locations() const {
+  std::lock_guard lock(mutex_);
+  return locations_;
+}
+
+std::map<std::string, ValveLocation> RecordingSink::latest_locations() const {
+  std::lock_guard lock(mutex_);
+  std::map<std::string, ValveLocation> latest;
+  for (const auto& sample : locations_)
+    latest.insert_or_assign(sample.location().to_string(), sample);
+  return latest;
 }
 
 std::vector<dds::TelemetrySample> RecordingSink::samples() const {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -27,12 +28,16 @@ class RecordingSink final : public bridge::Sink {
   };
 
   void presence(const ValvePresence& sample) override;
+  void location(const ValveLocation& sample) override;
   void telemetry(const dds::TelemetrySample& sample) override;
   void error_cleared(std::uint32_t serial, ErrorKind kind) override;
   void command_status(const CommandStatus& status) override;
   void gateway_status(const GatewayStatus& status) override;
 
   std::vector<ValvePresence> presences() const;
+  std::vector<ValveLocation> locations() const;
+  // The newest sample of each location, by name.
+  std::map<std::string, ValveLocation> latest_locations() const;
   std::vector<dds::TelemetrySample> samples() const;
   std::vector<std::pair<std::uint32_t, ErrorKind>> cleared() const;
   std::vector<CommandStatus> statuses() const;
@@ -53,6 +58,7 @@ class RecordingSink final : public bridge::Sink {
  private:
   mutable std::mutex mutex_;
   std::vector<Arrived<ValvePresence>> presences_;
+  std::vector<ValveLocation> locations_;
   std::vector<Arrived<dds::TelemetrySample>> samples_;
   std::vector<std::pair<std::uint32_t, ErrorKind>> cleared_;
   std::vector<Arrived<CommandStatus>> statuses_;

@@ -92,7 +92,10 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       tracker_(std::make_unique<CommandTracker>(config_)),
       limiter_(std::make_unique<CommandRateLimiter>(config_.command_rate_per_valve,
                                                     config_.command_burst_per_valve)),
-      next_status_(clock_->steady() + kStatusPeriod) {}
+      next_status_(clock_->steady() + kStatusPeriod) {
+  // Every place at once, so that an ECU resolves every name before the first valve announces.
+  for (const auto& place : config_.layout.locations()) publish_location(place, false);
+}
 
 Bridge::~Bridge() = default;
 
@@ -287,7 +290,59 @@ void Bridge::publish_presence(const directory::ValveRecord& valve) {
   sample.boot_mode(valve.boot_mode);
   sample.last_seen_ns(unix_nanoseconds(valve.last_seen));
   sample.gateway(config_.gateway_name);
+  const auto* place = config_.layout.find_serial(valve.serial);
+  sample.location(place ? place->name : "");
   sink_.presence(sample);
+  if (place) {
+    publish_location(*place, valve.online);
+  } else if (!valve.online) {
+    reported_unassigned_.erase(valve.serial);
+  } else if (!config_.layout.empty() && reported_unassigned_.insert(valve.serial).second) {
+    spdlog::warn(
+        "{} is online at {} and sits in no location of this gateway's layout; assign "
+        "it to its place (docs/layout.md)",
+        codec::format_serial(valve.serial), hex_address(valve.address));
+  }
+}
+
+ValveLocation Bridge::location_sample(const layout::Location& place, bool online) const {
+  ValveLocation sample;
+  sample.location(place.name);
+  sample.gateway(config_.gateway_name);
+  sample.order(static_cast<std::uint16_t>(place.order));
+  switch (place.role) {
+    case layout::Role::kSection:
+      sample.role(ROLE_SECTION);
+      break;
+    case layout::Role::kMaster:
+      sample.role(ROLE_MASTER);
+      break;
+    case layout::Role::kRate:
+      sample.role(ROLE_RATE);
+      break;
+    case layout::Role::kOther:
+      sample.role(ROLE_OTHER);
+      break;
+  }
+  sample.assigned(place.serial.has_value());
+  sample.serial(place.serial.value_or(0));
+  sample.state(!place.serial ? LOCATION_EMPTY : online ? LOCATION_OK : LOCATION_MISSING);
+  if (const auto mechanics = config_.layout.mechanics_of(place)) {
+    sample.mechanics_known(true);
+    sample.closed_degrees(static_cast<float>(mechanics->closed_degrees));
+    sample.opened_degrees(static_cast<float>(mechanics->opened_degrees));
+  }
+  return sample;
+}
+
+void Bridge::publish_location(const layout::Location& place, bool online) {
+  auto sample = location_sample(place, online);
+  const auto [published, added] = published_locations_.try_emplace(place.name, sample);
+  if (!added) {
+    if (published->second == sample) return;
+    published->second = sample;
+  }
+  sink_.location(sample);
 }
 
 // ---- Commands -----------------------------------------------------------------------------

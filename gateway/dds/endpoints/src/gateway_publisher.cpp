@@ -57,6 +57,10 @@ void GatewayPublisher::presence(const ValvePresence& sample) {
   report(topics::kPresence, state_.write(sample, sample.last_seen_ns()));
 }
 
+void GatewayPublisher::location(const ValveLocation& sample) {
+  report(topics::kLocation, state_.write(sample, 0));
+}
+
 void GatewayPublisher::telemetry(const TelemetrySample& sample) {
   std::visit(
       [this](const auto& s) {

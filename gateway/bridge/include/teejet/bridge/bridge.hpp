@@ -61,6 +61,7 @@ class Sink {
  public:
   virtual ~Sink() = default;
   virtual void presence(const ValvePresence& sample) = 0;
+  virtual void location(const ValveLocation& sample) = 0;
   virtual void telemetry(const dds::TelemetrySample& sample) = 0;
   virtual void error_cleared(std::uint32_t serial, ErrorKind kind) = 0;
   virtual void command_status(const CommandStatus& status) = 0;
@@ -151,7 +152,11 @@ class Bridge {
   std::vector<const ResentPoll*> quiet_polls(const directory::ValveRecord& valve,
                                              SteadyTime now) const;
   void poll_again(const directory::ValveRecord& valve, const std::vector<const ResentPoll*>& polls);
+  // The valve's presence, and the state of the location it sits at (or, when it sits nowhere
+  // and the layout has places, a log line naming it).
   void publish_presence(const directory::ValveRecord& valve);
+  ValveLocation location_sample(const layout::Location& place, bool online) const;
+  void publish_location(const layout::Location& place, bool online);  // when it changed
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
@@ -206,6 +211,8 @@ class Bridge {
   std::unique_ptr<CommandTracker> tracker_;
   std::unique_ptr<CommandRateLimiter> limiter_;
   std::map<std::uint32_t, std::set<ErrorKind>> latched_errors_;
+  std::map<std::string, ValveLocation> published_locations_;  // by location name
+  std::set<std::uint32_t> reported_unassigned_;  // online valves in no location, logged once
   // Valves displaced from their address, and by whom: commands wait for their next I'm Here.
   std::map<std::uint32_t, std::uint32_t> displaced_by_;
   // Per valve and resent reply: since when it is awaited (polled, or last heard) and how many

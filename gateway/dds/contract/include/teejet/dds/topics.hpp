@@ -17,6 +17,7 @@
 namespace teejet::dds::topics {
 
 inline constexpr const char* kPresence = "teejet/valve/presence";
+inline constexpr const char* kLocation = "teejet/valve/location";
 inline constexpr const char* kError = "teejet/valve/error";
 inline constexpr const char* kCommand = "teejet/valve/command";
 inline constexpr const char* kCommandStatus = "teejet/valve/command_status";
@@ -32,6 +33,7 @@ inline constexpr std::size_t kMaxGatewayNameLength = 64;
 namespace detail {
 
 inline std::string topic_of(std::type_identity<ValvePresence>) { return kPresence; }
+inline std::string topic_of(std::type_identity<ValveLocation>) { return kLocation; }
 inline std::string topic_of(std::type_identity<ValveError>) { return kError; }
 inline std::string topic_of(std::type_identity<ValveCommand>) { return kCommand; }
 inline std::string topic_of(std::type_identity<CommandStatus>) { return kCommandStatus; }
@@ -60,20 +62,21 @@ Result<eprosima::fastdds::dds::Topic*> topic_of(Participant& participant) {
   return participant.topic<typename PubSubTypeOf<Sample>::type>(topic_name<Sample>());
 }
 
-// Every sample type of the contract, in the order of docs/topics.md: presence, the telemetry
-// (errors last), the commands and their statuses, the gateways' status and the raw frames.
+// Every sample type of the contract, in the order of docs/topics.md: presence, the locations,
+// the telemetry (errors last), the commands and their statuses, the gateways' status and the raw
+// frames.
 template <class... Samples>
 struct SampleTypes {};
 template <class... Telemetry>
 constexpr auto every_sample_type(std::type_identity<std::variant<Telemetry...>>) {
-  return SampleTypes<ValvePresence, Telemetry..., ValveCommand, CommandStatus, GatewayStatus,
-                     BusFrame>{};
+  return SampleTypes<ValvePresence, ValveLocation, Telemetry..., ValveCommand, CommandStatus,
+                     GatewayStatus, BusFrame>{};
 }
 using EverySampleType = decltype(every_sample_type(std::type_identity<TelemetrySample>{}));
 
 // Every profile allows 4096 instances (valves, or valve and error kind) per topic.
 
-// State topics (presence, telemetry, errors, gateway status): RELIABLE, TRANSIENT_LOCAL,
+// State topics (presence, locations, telemetry, errors, gateway status): RELIABLE, TRANSIENT_LOCAL,
 // KEEP_LAST 1 per instance. A late joiner gets the current value of every valve at once, and a
 // BEST_EFFORT or VOLATILE reader still matches.
 eprosima::fastdds::dds::DataWriterQos state_writer_qos();

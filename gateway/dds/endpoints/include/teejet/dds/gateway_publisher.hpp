@@ -87,6 +87,7 @@ class GatewayPublisher final : public bridge::Sink {
                                                           const std::string& gateway_name);
 
   void presence(const ValvePresence& sample) override;
+  void location(const ValveLocation& sample) override;
   void telemetry(const TelemetrySample& sample) override;
   void error_cleared(std::uint32_t serial, ErrorKind kind) override;
   void command_status(const CommandStatus& status) override;
@@ -108,7 +109,7 @@ class GatewayPublisher final : public bridge::Sink {
  private:
   GatewayPublisher() = default;
 
-  using StateSample = std::variant<ValvePresence, GatewayStatus>;
+  using StateSample = std::variant<ValvePresence, ValveLocation, GatewayStatus>;
   SampleWriters<TelemetrySample> telemetry_;
   SampleWriters<StateSample> state_;
   SampleWriters<std::variant<CommandStatus>> command_status_;

@@ -1,0 +1,88 @@
+// Where each valve sits, as an ECU that joins late sees it on DDS: every place of the gateway's
+// layout with its serial and state, and each valve's presence naming its place.
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+
+#include "gateway_fixture.hpp"
+#include "support/dds_peer.hpp"
+
+namespace teejet::gateway {
+namespace {
+
+using namespace std::chrono_literals;
+using fixture::make_gateway;
+using fixture::sim_config;
+using fixture::start_and_wait_online;
+using teejet::testing::DdsPeer;
+using teejet::testing::eventually;
+using teejet::testing::latest_by_serial;
+
+// Six places for six simulated valves (TJV000001..6): five hold 1..5, the sixth a serial that
+// is not on the bus; TJV000006 sits nowhere.
+layout::Layout six_places() {
+  std::vector<layout::Location> places;
+  for (unsigned i = 1; i <= 5; ++i) {
+    places.push_back({.name = "section-0" + std::to_string(i), .order = i + 1, .serial = i});
+  }
+  places.push_back({.name = "left-master",
+                    .order = 1,
+                    .role = layout::Role::kMaster,
+                    .serial = 99,
+                    .mechanics = layout::Mechanics{0, 360}});
+  return *layout::Layout::make(places, layout::Mechanics{0, 90});
+}
+
+std::map<std::string, ValveLocation>& latest_by_name(eprosima::fastdds::dds::DataReader* reader,
+                                                     std::map<std::string, ValveLocation>& seen) {
+  ValveLocation sample;
+  eprosima::fastdds::dds::SampleInfo info;
+  while (reader->take_next_sample(&sample, &info) ==
+         eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+    if (info.valid_data) seen[sample.location().to_string()] = sample;
+  }
+  return seen;
+}
+
+TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
+  auto config = sim_config("gw-layout", 6);
+  config.bridge.layout = six_places();
+  auto gateway = make_gateway(config);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
+
+  DdsPeer ecu(config.domain, "late-ecu");
+  auto* locations = ecu.reader<ValveLocation>();
+  auto* presence = ecu.reader<ValvePresence>();
+  ASSERT_NE(locations, nullptr);
+  ASSERT_NE(presence, nullptr);
+  std::map<std::string, ValveLocation> places;
+  const auto settled = [&] {
+    latest_by_name(locations, places);
+    if (places.size() != 6) return false;
+    for (unsigned i = 1; i <= 5; ++i) {
+      if (places["section-0" + std::to_string(i)].state() != LOCATION_OK) return false;
+    }
+    return true;
+  };
+  ASSERT_TRUE(eventually(settled, 15s)) << places.size() << " places seen";
+  const auto& master = places.at("left-master");
+  EXPECT_EQ(master.state(), LOCATION_MISSING);
+  EXPECT_EQ(master.serial(), 99u);
+  EXPECT_EQ(master.role(), ROLE_MASTER);
+  EXPECT_EQ(master.order(), 1u);
+  EXPECT_EQ(master.opened_degrees(), 360.0f);
+  EXPECT_EQ(master.gateway().to_string(), "gw-layout");
+  EXPECT_EQ(places.at("section-03").serial(), 3u);
+  EXPECT_EQ(places.at("section-03").order(), 4u);
+
+  std::map<std::uint32_t, ValvePresence> valves;
+  ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, valves).size() == 6; }, 15s));
+  EXPECT_EQ(valves.at(3).location().to_string(), "section-03");
+  EXPECT_EQ(valves.at(6).location().to_string(), "");  // online, in no place
+  gateway->stop();
+}
+
+}  // namespace
+}  // namespace teejet::gateway
