@@ -9,6 +9,7 @@
 #include "support/valve_commands.hpp"
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/virtual_bus.hpp"
+#include "teejet/dds/names.hpp"
 
 namespace teejet::bridge {
 namespace {
@@ -752,6 +753,23 @@ TEST_F(BridgeTest, WithoutALayoutNoLocationIsPublished) {
   announce(bridge, 0xD8, 1, kStart);
   EXPECT_TRUE(sink.locations().empty());
   EXPECT_EQ(sink.last_presence(1)->sample.location().to_string(), "");
+}
+
+TEST_F(BridgeTest, EveryRoleKeepsItsLayoutNameOnDds) {
+  auto c = config();
+  std::vector<layout::Location> places;
+  for (const auto name : layout::role_names()) {
+    places.push_back({.name = "place-" + std::string(name),
+                      .order = static_cast<unsigned>(places.size() + 1),
+                      .role = *layout::role_from(name)});
+  }
+  c.layout = *layout::Layout::make(places);
+  Bridge bridge(c, gateway_bus, sink, clock);
+  const auto published = sink.latest_locations();
+  ASSERT_EQ(published.size(), layout::role_names().size());
+  for (const auto name : layout::role_names()) {
+    EXPECT_EQ(dds::to_string(published.at("place-" + std::string(name)).role()), name);
+  }
 }
 
 }  // namespace

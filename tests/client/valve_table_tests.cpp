@@ -181,5 +181,51 @@ TEST(ValvectlTable, TelemetryKeepsTheLatestMessageOfEachSubject) {
   EXPECT_FALSE(table.row(4)->temperature_c());
 }
 
+ValveLocation place(const std::string& name, const std::string& gateway, unsigned order,
+                    std::optional<std::uint32_t> serial, LocationState state) {
+  ValveLocation p;
+  p.location(name);
+  p.gateway(gateway);
+  p.order(static_cast<std::uint16_t>(order));
+  p.assigned(serial.has_value());
+  p.serial(serial.value_or(0));
+  p.state(state);
+  return p;
+}
+
+TEST(ValvectlTable, PlacesComeInMachineOrderAndAreCompleteWhenEveryGatewayToldThemAll) {
+  ValveTable table;
+  table.set_gateways_matched(1);
+  auto status = gateway_status("a", 0);
+  status.locations_known(2);
+  table.on_gateway_status(status);
+  table.on_location(place("section-02", "a", 3, 5, LOCATION_OK));
+  EXPECT_FALSE(table.directory_complete());  // one place of two
+  table.on_location(place("left-master", "a", 1, std::nullopt, LOCATION_EMPTY));
+  EXPECT_TRUE(table.directory_complete());
+  const auto places = table.locations();
+  ASSERT_EQ(places.size(), 2u);
+  EXPECT_EQ(places[0].name, "left-master");
+  EXPECT_EQ(places[0].serial, std::nullopt);
+  EXPECT_EQ(places[1].name, "section-02");
+  EXPECT_EQ(places[1].serial, 5u);
+  table.on_location(place("section-02", "a", 3, 6, LOCATION_MISSING));  // replaced
+  EXPECT_EQ(table.locations_named("section-02").at(0).serial, 6u);
+  EXPECT_EQ(table.locations_named("section-02").at(0).state, LOCATION_MISSING);
+}
+
+TEST(ValvectlTable, ANameTwoGatewaysClaimIsTwoPlaces) {
+  ValveTable table;
+  table.on_location(place("section-01", "a", 1, 1, LOCATION_OK), "01.0f.aa");
+  table.on_location(place("section-01", "b", 1, 2, LOCATION_OK), "01.0f.bb");
+  const auto claimed = table.locations_named("section-01");
+  ASSERT_EQ(claimed.size(), 2u);
+  EXPECT_EQ(claimed[0].gateway, "a");
+  EXPECT_EQ(claimed[1].gateway, "b");
+  table.on_participant_liveliness("01.0f.bb", false);
+  EXPECT_TRUE(table.locations_named("section-01").at(1).gateway_lost);
+  EXPECT_TRUE(table.locations_named("section-0").empty());
+}
+
 }  // namespace
 }  // namespace teejet::client

@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
+#include "support/subprocess.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -81,6 +83,23 @@ TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   ASSERT_TRUE(eventually([&] { return latest_by_serial(presence, valves).size() == 6; }, 15s));
   EXPECT_EQ(valves.at(3).location().to_string(), "section-03");
   EXPECT_EQ(valves.at(6).location().to_string(), "");  // online, in no place
+
+  // The same through valvectl, as the person at the machine reads it.
+  teejet::testing::Subprocess valvectl(
+      {VALVECTL_PATH, "--domain", std::to_string(config.domain), "--json", "layout"});
+  const auto listed = valvectl.wait(30s);
+  ASSERT_EQ(listed.exit_code, 0) << listed.out << listed.err;
+  const auto json = nlohmann::json::parse(listed.out);
+  std::vector<std::string> order;
+  for (const auto& row : json["locations"]) order.push_back(row["location"]);
+  EXPECT_EQ(order, (std::vector<std::string>{"left-master", "section-01", "section-02",
+                                             "section-03", "section-04", "section-05"}));
+  EXPECT_EQ(json["locations"][0]["state"], "missing");
+  EXPECT_EQ(json["locations"][0]["serial"], "TJV000099");
+  EXPECT_EQ(json["locations"][3]["state"], "ok");
+  EXPECT_EQ(json["locations"][3]["serial"], "TJV000003");
+  EXPECT_EQ(json["locations"][3]["address"], 0xDA);
+  EXPECT_EQ(json["unassigned"].dump(), R"(["TJV000006"])");
   gateway->stop();
 }
 

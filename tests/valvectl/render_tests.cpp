@@ -154,5 +154,59 @@ TEST(ValvectlRender, GatewayLine) {
             "decode errors\n");
 }
 
+TEST(ValvectlRender, LayoutListsThePlacesInMachineOrderAndTheValvesInNone) {
+  ValveTable table;
+  const auto place = [&](const char* name, unsigned order, std::optional<std::uint32_t> serial,
+                         LocationState state, const char* gateway = "boom") {
+    ValveLocation p;
+    p.location(name);
+    p.gateway(gateway);
+    p.order(static_cast<std::uint16_t>(order));
+    p.role(order == 1 ? ROLE_MASTER : ROLE_SECTION);
+    p.assigned(serial.has_value());
+    p.serial(serial.value_or(0));
+    p.state(state);
+    p.mechanics_known(true);
+    p.opened_degrees(90);
+    table.on_location(p);
+  };
+  place("section-01", 2, 1, LOCATION_OK);
+  place("left-master", 1, 99, LOCATION_MISSING);
+  place("section-02", 3, std::nullopt, LOCATION_EMPTY);
+  place("section-02", 3, std::nullopt, LOCATION_EMPTY, "rig-2");
+  ValvePresence one;
+  one.serial(1);
+  one.address(0xD8);
+  one.online(true);
+  one.gateway("boom");
+  one.location("section-01");
+  table.on_presence(one);
+  table.on_telemetry(1, codec::Position{45.0}, 1);
+  ValvePresence stray = one;
+  stray.serial(6);
+  stray.address(0xDD);
+  stray.location("");
+  table.on_presence(stray);
+  // clang-format off
+  const char* expected =
+R"(ORDER  LOCATION     ROLE     SERIAL     STATE    POS_DEG  ADDR  GATEWAY
+    1  left-master  master   TJV000099  missing        -  -     boom
+    2  section-01   section  TJV000001  ok          45.0  0xD8  boom
+    3  section-02   section  -          empty          -  -     boom
+    3  section-02   section  -          empty          -  -     rig-2
+warning: section-02 is a place in the layouts of boom and rig-2: one name for two places; rename one of them
+unassigned: TJV000006 at 0xDD on boom is online and sits in no place
+)";
+  // clang-format on
+  EXPECT_EQ(render_layout(table), expected);
+  const auto json = layout_json(table);
+  EXPECT_EQ(json["locations"][1].dump(),
+            R"({"address":216,"closed_deg":0.0,"gateway":"boom","location":"section-01",)"
+            R"("opened_deg":90.0,"order":2,"position":45.0,"role":"section","serial":"TJV000001",)"
+            R"("state":"ok"})");
+  EXPECT_EQ(json["locations"][0]["position"], nullptr);
+  EXPECT_EQ(json["unassigned"].dump(), R"(["TJV000006"])");
+}
+
 }  // namespace
 }  // namespace teejet::valvectl

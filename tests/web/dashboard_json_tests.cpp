@@ -49,14 +49,23 @@ TEST(WebValves, AValveCarriesTheTableRowTelemetryRepliesAndTheTargetOfItsMove) {
        {{"speed_percent", 80}, {"direction", "open"}, {"opening_direction", "clockwise"}}},
   };
   const json expected = {
-      {"serial", "TJV000001"},  {"address", 217},
-      {"online", true},         {"boot_mode", false},
-      {"position", 45.3},       {"temperature_c", 25},
-      {"volts", 12.1},          {"errors", json::array({"high_current"})},
-      {"gateway", "gw"},        {"gateway_lost", false},
-      {"target", 90.0},         {"amps", 0.35},
-      {"speed_percent", 80},    {"direction", "open"},
-      {"telemetry", telemetry}, {"also_reported_by", json::array()},
+      {"serial", "TJV000001"},
+      {"address", 217},
+      {"online", true},
+      {"boot_mode", false},
+      {"position", 45.3},
+      {"temperature_c", 25},
+      {"volts", 12.1},
+      {"errors", json::array({"high_current"})},
+      {"gateway", "gw"},
+      {"gateway_lost", false},
+      {"location", ""},
+      {"target", 90.0},
+      {"amps", 0.35},
+      {"speed_percent", 80},
+      {"direction", "open"},
+      {"telemetry", telemetry},
+      {"also_reported_by", json::array()},
   };
   EXPECT_EQ(valves_json(table, {{1, 90.0}}), json::array({expected}));
 }

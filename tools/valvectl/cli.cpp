@@ -56,6 +56,7 @@ struct Parser {
   Invocation invocation;
   CLI::App* list = nullptr;
   CLI::App* watch = nullptr;
+  CLI::App* layout = nullptr;
   CLI::App* move = nullptr;
   CLI::App* stop = nullptr;
   CLI::App* manual = nullptr;
@@ -192,6 +193,9 @@ void define(Parser& parser) {
                                              "stop after this many seconds (default: Ctrl-C)");
   parser.watch->add_option("--title", parser.invocation.watch.title,
                            "a line above the table on every refresh (e.g. a dashboard's URL)");
+
+  parser.layout = app.add_subcommand(
+      "layout", "where each valve sits: every place of the gateways' layouts, in machine order");
 
   parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
   add_serial_or_all(parser.move, raw);
@@ -340,6 +344,8 @@ void build_invocation(Parser& parser) {
   CLI::App* used = parser.app.get_subcommands().front();
   if (used == parser.list) {
     invocation.subcommand = Subcommand::kList;
+  } else if (used == parser.layout) {
+    invocation.subcommand = Subcommand::kLayout;
   } else if (used == parser.watch) {
     invocation.subcommand = Subcommand::kWatch;
     invocation.watch.interval = std::chrono::milliseconds(parser.raw.interval_ms);

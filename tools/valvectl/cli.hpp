@@ -46,7 +46,7 @@ struct CommandRequest {
   std::chrono::milliseconds wait_timeout{60000};  // backstop when no final status arrives
 };
 
-enum class Subcommand { kList, kWatch, kCommand };
+enum class Subcommand { kList, kWatch, kLayout, kCommand };
 
 struct Invocation {
   GlobalOptions global;

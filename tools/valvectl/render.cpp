@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <set>
 #include <sstream>
 
 #include "teejet/codec/table.hpp"
@@ -39,6 +41,53 @@ std::string scalar_text(const nlohmann::json& value) {
   return value.dump();
 }
 
+enum Align { kLeft, kRight };
+struct Column {
+  const char* header;
+  Align align;
+};
+
+// A header line and one line per row, each column as wide as its widest cell, two blanks apart.
+std::string aligned(const std::vector<Column>& columns,
+                    const std::vector<std::vector<std::string>>& cells) {
+  std::vector<std::size_t> widths;
+  for (const Column& column : columns) widths.push_back(std::string(column.header).size());
+  for (const auto& line : cells) {
+    for (std::size_t i = 0; i < line.size(); ++i) widths[i] = std::max(widths[i], line[i].size());
+  }
+  std::ostringstream out;
+  const auto append_line = [&](const std::vector<std::string>& line) {
+    std::string text;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      const std::string padding(widths[i] - line[i].size(), ' ');
+      text += columns[i].align == kRight ? padding + line[i] : line[i] + padding;
+      if (i + 1 < line.size()) text += "  ";
+    }
+    // The last column is left-aligned: no trailing blanks.
+    text.erase(text.find_last_not_of(' ') + 1);
+    out << text << '\n';
+  };
+  std::vector<std::string> header;
+  for (const Column& column : columns) header.emplace_back(column.header);
+  append_line(header);
+  for (const auto& line : cells) append_line(line);
+  return out.str();
+}
+
+// Online valves that sit in no place, of gateways that have places.
+std::vector<ValveRow> unassigned(const ValveTable& table) {
+  std::set<std::string> with_places;
+  for (const LocationRow& place : table.locations()) with_places.insert(place.gateway);
+  std::vector<ValveRow> rows;
+  for (const ValveRow& row : table.rows()) {
+    if (row.online && !row.gateway_lost && row.location.empty() &&
+        with_places.contains(row.gateway)) {
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 std::string one_decimal(double value) {
@@ -48,11 +97,6 @@ std::string one_decimal(double value) {
 }
 
 std::string render_table(const std::vector<ValveRow>& rows) {
-  enum Align { kLeft, kRight };
-  struct Column {
-    const char* header;
-    Align align;
-  };
   const std::vector<Column> columns = {
       {"SERIAL", kLeft},  {"ADDR", kLeft},   {"ONLINE", kLeft}, {"POS_DEG", kRight},
       {"TEMP_C", kRight}, {"VOLTS", kRight}, {"ERRORS", kLeft}, {"GATEWAY", kLeft},
@@ -70,27 +114,8 @@ std::string render_table(const std::vector<ValveRow>& rows) {
         row.gateway,
     });
   }
-  std::vector<std::size_t> widths;
-  for (const Column& column : columns) widths.push_back(std::string(column.header).size());
-  for (const auto& line : cells) {
-    for (std::size_t i = 0; i < line.size(); ++i) widths[i] = std::max(widths[i], line[i].size());
-  }
-  const auto append_line = [&](std::ostringstream& out, const std::vector<std::string>& line) {
-    std::string text;
-    for (std::size_t i = 0; i < line.size(); ++i) {
-      const std::string padding(widths[i] - line[i].size(), ' ');
-      text += columns[i].align == kRight ? padding + line[i] : line[i] + padding;
-      if (i + 1 < line.size()) text += "  ";
-    }
-    // The last column is left-aligned: no trailing blanks.
-    text.erase(text.find_last_not_of(' ') + 1);
-    out << text << '\n';
-  };
   std::ostringstream out;
-  std::vector<std::string> header;
-  for (const Column& column : columns) header.emplace_back(column.header);
-  append_line(out, header);
-  for (const auto& line : cells) append_line(out, line);
+  out << aligned(columns, cells);
   for (const ValveRow& row : rows) {
     if (row.also_reported_by.empty()) continue;
     out << "warning: " << codec::format_serial(row.serial) << " is online on " << row.gateway;
@@ -99,6 +124,72 @@ std::string render_table(const std::vector<ValveRow>& rows) {
            "commands to it but Stop until only one reports it\n";
   }
   return out.str();
+}
+
+std::string render_layout(const ValveTable& table) {
+  const std::vector<Column> columns = {
+      {"ORDER", kRight}, {"LOCATION", kLeft}, {"ROLE", kLeft}, {"SERIAL", kLeft},
+      {"STATE", kLeft},  {"POS_DEG", kRight}, {"ADDR", kLeft}, {"GATEWAY", kLeft},
+  };
+  std::vector<std::vector<std::string>> cells;
+  std::map<std::string, std::vector<std::string>> gateways_of;
+  for (const LocationRow& place : table.locations()) {
+    const auto valve = place.serial ? table.row(*place.serial) : std::nullopt;
+    const bool here = valve && !place.gateway_lost && place.state == LOCATION_OK;
+    cells.push_back({
+        std::to_string(place.order),
+        place.name,
+        std::string(dds::to_string(place.role)),
+        place.serial ? codec::format_serial(*place.serial) : "-",
+        place.gateway_lost ? "unknown" : std::string(dds::to_string(place.state)),
+        here && valve->position_degrees() ? one_decimal(*valve->position_degrees()) : "-",
+        here ? address_text(valve->address) : "-",
+        place.gateway,
+    });
+    gateways_of[place.name].push_back(place.gateway);
+  }
+  std::ostringstream out;
+  out << aligned(columns, cells);
+  for (const auto& [name, gateways] : gateways_of) {
+    if (gateways.size() < 2) continue;
+    out << "warning: " << name << " is a place in the layouts of";
+    for (std::size_t i = 0; i < gateways.size(); ++i) {
+      out << (i == 0 ? " " : i + 1 == gateways.size() ? " and " : ", ") << gateways[i];
+    }
+    out << ": one name for two places; rename one of them\n";
+  }
+  for (const ValveRow& row : unassigned(table)) {
+    out << "unassigned: " << codec::format_serial(row.serial) << " at " << address_text(row.address)
+        << " on " << row.gateway << " is online and sits in no place\n";
+  }
+  return out.str();
+}
+
+nlohmann::json layout_json(const ValveTable& table) {
+  nlohmann::json places = nlohmann::json::array();
+  const auto optional = [](const auto& value) -> nlohmann::json {
+    if (!value) return nullptr;
+    return *value;
+  };
+  for (const LocationRow& place : table.locations()) {
+    const auto valve = place.serial ? table.row(*place.serial) : std::nullopt;
+    const bool here = valve && !place.gateway_lost && place.state == LOCATION_OK;
+    places.push_back({
+        {"order", place.order},
+        {"location", place.name},
+        {"role", dds::to_string(place.role)},
+        {"serial", place.serial ? nlohmann::json(codec::format_serial(*place.serial)) : nullptr},
+        {"state", place.gateway_lost ? "unknown" : dds::to_string(place.state)},
+        {"position", here ? optional(valve->position_degrees()) : nullptr},
+        {"address", here ? nlohmann::json(valve->address) : nullptr},
+        {"gateway", place.gateway},
+        {"closed_deg", optional(place.closed_degrees)},
+        {"opened_deg", optional(place.opened_degrees)},
+    });
+  }
+  nlohmann::json serials = nlohmann::json::array();
+  for (const ValveRow& row : unassigned(table)) serials.push_back(codec::format_serial(row.serial));
+  return {{"locations", places}, {"unassigned", serials}};
 }
 
 std::string render_gateways(const std::vector<GatewaySummary>& gateways) {

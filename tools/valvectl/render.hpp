@@ -18,6 +18,14 @@ using namespace client;
 // An aligned text table with a header line; a missing value shows as "-". Below it, a warning
 // line for each serial that more than one gateway reports online.
 std::string render_table(const std::vector<ValveRow>& rows);
+// The places of every gateway's layout in machine order: ORDER LOCATION ROLE SERIAL STATE POS_DEG
+// ADDR GATEWAY, the position and address of the valve that sits there. Below it, a line for each
+// name two gateways claim and for each online valve that sits in no place.
+std::string render_layout(const ValveTable& table);
+// {"locations":[{"order":1,"location":"left-master","role":"master","serial":"TJV000101",
+//   "state":"ok","position":45.0,"address":216,"gateway":"...","closed_deg":0.0,
+//   "opened_deg":360.0},...],"unassigned":["TJV000006"]}; missing values are null.
+nlohmann::json layout_json(const ValveTable& table);
 // One line per gateway: name, interface, bus state, valves online/known, frame counters.
 std::string render_gateways(const std::vector<GatewaySummary>& gateways);
 

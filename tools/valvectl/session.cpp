@@ -79,6 +79,8 @@ class Session {
         return list();
       case Subcommand::kWatch:
         return watch();
+      case Subcommand::kLayout:
+        return layout();
       case Subcommand::kCommand:
         return command();
     }
@@ -136,6 +138,29 @@ class Session {
                seconds_text(invocation_.global.timeout));
       return kExitNotFound;
     }
+    return kExitOk;
+  }
+
+  int layout() {
+    discover_directory(after_timeout());
+    if (terminal_.interrupted) return kExitInterrupted;
+    view_.wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
+                     Deadline(Clock::now() + kTelemetryGrace), terminal_.interrupted);
+    const ValveTable table = view_.snapshot();
+    if (table.empty()) {
+      complain("no gateway found on " + domain_text());
+      return kExitNotFound;
+    }
+    if (table.locations().empty()) {
+      complain("no gateway on " + domain_text() + " has a layout (docs/layout.md)");
+      return kExitNotFound;
+    }
+    if (invocation_.global.json) {
+      terminal_.out << layout_json(table).dump() << '\n';
+    } else {
+      terminal_.out << render_layout(table);
+    }
+    terminal_.out << std::flush;
     return kExitOk;
   }
 

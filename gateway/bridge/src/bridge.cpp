@@ -602,6 +602,7 @@ void Bridge::publish_gateway_status() {
   status.valves_known(static_cast<std::uint32_t>(valves.size()));
   if (online.size() > kMaxSerialsOnline) online.resize(kMaxSerialsOnline);
   status.serials_online(std::move(online));
+  status.locations_known(static_cast<std::uint32_t>(config_.layout.locations().size()));
   status.stamp_ns(unix_nanoseconds(clock_->wall()));
   sink_.gateway_status(status);
 }

@@ -53,6 +53,7 @@ nlohmann::json to_json(const ValveRow& row) {
       {"volts", optional(row.volts())},
       {"errors", errors},
       {"gateway", row.gateway},
+      {"location", row.location},
       {"also_reported_by", row.also_reported_by},
       {"telemetry", telemetry},
   };

@@ -78,6 +78,7 @@ void ValveTable::on_gateway_status(const GatewayStatus& status, const std::strin
   summary.rx_errors = status.rx_errors();
   summary.rx_dropped = status.rx_dropped();
   summary.gateways_seen = status.gateways_seen();
+  summary.locations_known = status.locations_known();
   if (!participant.empty()) summary.participants.insert(participant);
 }
 
@@ -87,6 +88,43 @@ void ValveTable::on_participant_liveliness(const std::string& participant, bool 
   } else {
     lost_participants_.insert(participant);
   }
+}
+
+void ValveTable::on_location(const ValveLocation& location, const std::string& participant) {
+  LocationRow row;
+  row.name = location.location().to_string();
+  row.gateway = location.gateway().to_string();
+  row.participant = participant;
+  row.order = location.order();
+  row.role = location.role();
+  if (location.assigned()) row.serial = location.serial();
+  row.state = location.state();
+  if (location.mechanics_known()) {
+    row.closed_degrees = location.closed_degrees();
+    row.opened_degrees = location.opened_degrees();
+  }
+  locations_.insert_or_assign({row.name, row.gateway}, std::move(row));
+}
+
+std::vector<LocationRow> ValveTable::locations() const {
+  std::vector<LocationRow> out;
+  for (const auto& [key, row] : locations_) {
+    out.push_back(row);
+    out.back().gateway_lost = lost(row.participant);
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const LocationRow& a, const LocationRow& b) { return a.order < b.order; });
+  return out;
+}
+
+std::vector<LocationRow> ValveTable::locations_named(std::string_view name) const {
+  std::vector<LocationRow> out;
+  for (auto it = locations_.lower_bound({std::string(name), std::string()});
+       it != locations_.end() && it->first.first == name; ++it) {
+    out.push_back(it->second);
+    out.back().gateway_lost = lost(it->second.participant);
+  }
+  return out;
 }
 
 bool ValveTable::lost(const std::string& participant) const {
@@ -111,6 +149,7 @@ ValveRow ValveTable::shown(const Entry& found) const {
   row.online = primary->presence.online();
   row.boot_mode = primary->presence.boot_mode();
   row.gateway = primary->presence.gateway().to_string();
+  row.location = primary->presence.location().to_string();
   row.participant = primary->participant;
   row.gateway_lost = lost(primary->participant);
   for (const auto& [key, report] : found.reports) {
@@ -185,6 +224,10 @@ bool ValveTable::directory_complete() const {
           });
         });
     if (static_cast<std::uint64_t>(known) < summary.valves_known) return false;
+    const auto places =
+        std::count_if(locations_.begin(), locations_.end(),
+                      [&gateway = name](const auto& item) { return item.first.second == gateway; });
+    if (static_cast<std::uint64_t>(places) < summary.locations_known) return false;
   }
   return true;
 }

@@ -82,6 +82,9 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
       subscribe<GatewayStatus>([this](const GatewayStatus& sample, const SampleInfo& info) {
         table_.on_gateway_status(sample, dds::participant_of(info.publication_handle));
       });
+  subscribe<ValveLocation>([this](const ValveLocation& sample, const SampleInfo& info) {
+    table_.on_location(sample, dds::participant_of(info.publication_handle));
+  });
   subscribe_telemetry(std::type_identity<dds::TelemetrySample>{});
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.

@@ -76,4 +76,30 @@ std::string_view to_string(BusState state) {
   return "unknown";
 }
 
+std::string_view to_string(LocationRole role) {
+  switch (role) {
+    case ROLE_SECTION:
+      return "section";
+    case ROLE_MASTER:
+      return "master";
+    case ROLE_RATE:
+      return "rate";
+    case ROLE_OTHER:
+      return "other";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(LocationState state) {
+  switch (state) {
+    case LOCATION_OK:
+      return "ok";
+    case LOCATION_MISSING:
+      return "missing";
+    case LOCATION_EMPTY:
+      return "empty";
+  }
+  return "unknown";
+}
+
 }  // namespace teejet::dds

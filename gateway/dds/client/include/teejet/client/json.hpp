@@ -15,7 +15,7 @@
 namespace teejet::client {
 
 // {"serial":"TJV000001","address":216,"online":true,"boot_mode":false,"position":45.0,
-//  "temperature_c":25,"volts":12.0,"errors":["high_voltage"],"gateway":"...",
+//  "temperature_c":25,"volts":12.0,"errors":["high_voltage"],"gateway":"...","location":"",
 //  "telemetry":{"position":{"degrees":45.0},"current":{"amps":0.35,...},...}}; missing values
 // are null, "telemetry" holds the latest message of every subject the valve has sent.
 nlohmann::json to_json(const ValveRow& row);

@@ -33,6 +33,7 @@ struct ValveRow {
   bool online = false;
   bool boot_mode = false;
   std::string gateway;
+  std::string location;  // where it sits in its gateway's layout; empty: in no place
   // The DDS participant that publishes it (its GUID prefix, "01.0f.…"): the gateway whose
   // command reader must hear a command to it.
   std::string participant;
@@ -64,11 +65,26 @@ struct GatewaySummary {
   std::uint16_t tx_errors = 0;  // the CAN controller's error counters
   std::uint16_t rx_errors = 0;
   std::uint64_t rx_dropped = 0;
-  std::uint32_t gateways_seen = 0;  // on the domain by its own count, itself included
+  std::uint32_t gateways_seen = 0;    // on the domain by its own count, itself included
+  std::uint32_t locations_known = 0;  // places in its layout
   // The participants publishing status under this name: more than one is two gateways
   // sharing a name.
   std::set<std::string> participants;
   bool lost = false;  // every participant under this name vanished
+};
+
+// One place of a gateway's layout (teejet/valve/location): one line of `valvectl layout`.
+struct LocationRow {
+  std::string name;
+  std::string gateway;
+  std::string participant;  // the publishing gateway's, as in ValveRow
+  unsigned order = 0;
+  LocationRole role = ROLE_SECTION;
+  std::optional<std::uint32_t> serial;
+  LocationState state = LOCATION_EMPTY;
+  std::optional<double> closed_degrees;  // both known, or neither
+  std::optional<double> opened_degrees;
+  bool gateway_lost = false;  // its gateway vanished: the state is the last word
 };
 
 class ValveTable {
@@ -81,6 +97,7 @@ class ValveTable {
   void on_error(std::uint32_t serial, ErrorKind kind);
   void on_error_cleared(std::uint32_t serial, ErrorKind kind);
   void on_gateway_status(const GatewayStatus& status, const std::string& participant = {});
+  void on_location(const ValveLocation& location, const std::string& participant = {});
   // A gateway's participant whose writers lost their liveliness or left (alive false), or came
   // back (true).
   void on_participant_liveliness(const std::string& participant, bool alive);
@@ -89,6 +106,10 @@ class ValveTable {
   std::vector<ValveRow> rows() const;
   std::optional<ValveRow> row(std::uint32_t serial) const;
   std::vector<GatewaySummary> gateways() const;  // by name
+  // Every place of every gateway's layout in machine order (order, then name, then gateway).
+  std::vector<LocationRow> locations() const;
+  // The places called `name`: one, or more when several gateways claim it (a mistake).
+  std::vector<LocationRow> locations_named(std::string_view name) const;
   std::optional<Reply> reply(std::uint32_t serial, std::string_view subject) const;
   std::size_t online_count() const;  // online and with a gateway alive
 
@@ -99,8 +120,9 @@ class ValveTable {
   // gateway met says it hears on the domain (gateways_seen).
   std::size_t gateways_expected() const;
   // Whether the directory is all here: every gateway expected (at least one) has reported its
-  // status, and each has published presence for as many valves as it says it knows. Presence
-  // and gateway status are durable, so this holds shortly after discovery.
+  // status, and each has published presence for as many valves, and as many places of its
+  // layout, as it says it knows. Presence, places and gateway status are durable, so this holds
+  // shortly after discovery.
   bool directory_complete() const;
   // Whether every online valve has reported position, temperature and voltage.
   bool telemetry_complete() const;
@@ -129,6 +151,7 @@ class ValveTable {
   std::map<std::uint32_t, Entry> rows_;
   std::uint64_t reports_ = 0;
   std::map<std::string, GatewaySummary> gateways_;
+  std::map<std::pair<std::string, std::string>, LocationRow> locations_;  // by (name, gateway)
   std::size_t gateways_matched_ = 0;
   std::set<std::string> lost_participants_;
 };
