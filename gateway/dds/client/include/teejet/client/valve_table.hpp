@@ -115,6 +115,7 @@ class ValveTable {
 
   // How many gateways discovery has found so far (writers of gateway status matched).
   void set_gateways_matched(std::size_t count) { gateways_matched_ = count; }
+  std::size_t gateways_matched() const { return gateways_matched_; }
 
   // How many gateways there are to meet: the most that discovery has matched or that any
   // gateway met says it hears on the domain (gateways_seen).
