@@ -20,6 +20,7 @@ using fixture::sim_config;
 using fixture::start_and_wait_online;
 using teejet::testing::DdsPeer;
 using teejet::testing::eventually;
+using teejet::testing::latest_by;
 using teejet::testing::latest_by_serial;
 
 // Six places for six simulated valves (TJV000001..6): five hold 1..5, the sixth a serial that
@@ -37,17 +38,6 @@ layout::Layout six_places() {
   return *layout::Layout::make(places, layout::Mechanics{0, 90});
 }
 
-std::map<std::string, ValveLocation>& latest_by_name(eprosima::fastdds::dds::DataReader* reader,
-                                                     std::map<std::string, ValveLocation>& seen) {
-  ValveLocation sample;
-  eprosima::fastdds::dds::SampleInfo info;
-  while (reader->take_next_sample(&sample, &info) ==
-         eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-    if (info.valid_data) seen[sample.location().to_string()] = sample;
-  }
-  return seen;
-}
-
 TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   auto config = sim_config("gw-layout", 6);
   config.bridge.layout = six_places();
@@ -61,7 +51,8 @@ TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   ASSERT_NE(presence, nullptr);
   std::map<std::string, ValveLocation> places;
   const auto settled = [&] {
-    latest_by_name(locations, places);
+    latest_by(locations, places,
+              [](const ValveLocation& place) { return place.location().to_string(); });
     if (places.size() != 6) return false;
     for (unsigned i = 1; i <= 5; ++i) {
       if (places["section-0" + std::to_string(i)].state() != LOCATION_OK) return false;

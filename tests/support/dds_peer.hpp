@@ -60,17 +60,24 @@ class DdsPeer {
   std::uint32_t next_id_ = 0;
 };
 
-// Takes every sample `reader` has and keeps the newest per serial in `seen`; returns `seen`.
-template <class Sample>
-std::map<std::uint32_t, Sample>& latest_by_serial(eprosima::fastdds::dds::DataReader* reader,
-                                                  std::map<std::uint32_t, Sample>& seen) {
+// Takes every sample `reader` has and keeps the newest per key_of(sample) in `seen`; returns
+// `seen`.
+template <class Key, class Sample, class KeyOf>
+std::map<Key, Sample>& latest_by(eprosima::fastdds::dds::DataReader* reader,
+                                 std::map<Key, Sample>& seen, KeyOf key_of) {
   Sample sample;
   eprosima::fastdds::dds::SampleInfo info;
   while (reader->take_next_sample(&sample, &info) ==
          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-    if (info.valid_data) seen[sample.serial()] = sample;
+    if (info.valid_data) seen[key_of(sample)] = sample;
   }
   return seen;
+}
+
+template <class Sample>
+std::map<std::uint32_t, Sample>& latest_by_serial(eprosima::fastdds::dds::DataReader* reader,
+                                                  std::map<std::uint32_t, Sample>& seen) {
+  return latest_by(reader, seen, [](const Sample& sample) { return sample.serial(); });
 }
 
 }  // namespace teejet::testing
