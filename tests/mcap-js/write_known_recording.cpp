@@ -98,7 +98,8 @@ json version_json(const teejet::SoftwareVersion& v) {
 }
 
 Sample presence(std::uint32_t serial, std::uint8_t address, bool online, std::uint32_t part,
-                bool boot, std::uint64_t seen, const std::string& gateway) {
+                bool boot, std::uint64_t seen, const std::string& gateway,
+                const std::string& location = "") {
   teejet::ValvePresence s;
   s.serial(serial);
   s.address(address);
@@ -107,13 +108,51 @@ Sample presence(std::uint32_t serial, std::uint8_t address, bool online, std::ui
   s.boot_mode(boot);
   s.last_seen_ns(seen);
   s.gateway(gateway);
+  s.location(location);
   return make(s, {{"serial", serial},
                   {"address", address},
                   {"online", online},
                   {"part_number", part},
                   {"boot_mode", boot},
                   {"last_seen_ns", u64(seen)},
-                  {"gateway", gateway}});
+                  {"gateway", gateway},
+                  {"location", location}});
+}
+
+struct LocationValues {
+  std::string location;
+  std::string gateway;
+  std::uint16_t order;
+  teejet::LocationRole role;
+  bool assigned;
+  std::uint32_t serial;
+  teejet::LocationState state;
+  bool mechanics_known;
+  float closed, opened;
+};
+
+Sample location(const LocationValues& v) {
+  teejet::ValveLocation s;
+  s.location(v.location);
+  s.gateway(v.gateway);
+  s.order(v.order);
+  s.role(v.role);
+  s.assigned(v.assigned);
+  s.serial(v.serial);
+  s.state(v.state);
+  s.mechanics_known(v.mechanics_known);
+  s.closed_degrees(v.closed);
+  s.opened_degrees(v.opened);
+  return make(s, {{"location", v.location},
+                  {"gateway", v.gateway},
+                  {"order", v.order},
+                  {"role", static_cast<std::uint32_t>(v.role)},
+                  {"assigned", v.assigned},
+                  {"serial", v.serial},
+                  {"state", static_cast<std::uint32_t>(v.state)},
+                  {"mechanics_known", v.mechanics_known},
+                  {"closed_degrees", v.closed},
+                  {"opened_degrees", v.opened}});
 }
 
 Sample version(std::uint32_t serial, teejet::SoftwareVersion app, teejet::SoftwareVersion boot,
@@ -314,6 +353,7 @@ struct GatewayValues {
   std::uint64_t stamp;
   std::uint32_t gateways_seen;
   std::vector<std::uint32_t> serials_online;
+  std::uint32_t locations_known;
 };
 
 Sample gateway_status(const GatewayValues& v) {
@@ -332,6 +372,7 @@ Sample gateway_status(const GatewayValues& v) {
   s.stamp_ns(v.stamp);
   s.gateways_seen(v.gateways_seen);
   s.serials_online(v.serials_online);
+  s.locations_known(v.locations_known);
   return make(s, {{"gateway", v.gateway},
                   {"can_interface", v.can_interface},
                   {"bus_state", static_cast<std::uint32_t>(v.bus_state)},
@@ -345,7 +386,8 @@ Sample gateway_status(const GatewayValues& v) {
                   {"valves_known", v.known},
                   {"stamp_ns", u64(v.stamp)},
                   {"gateways_seen", v.gateways_seen},
-                  {"serials_online", v.serials_online}});
+                  {"serials_online", v.serials_online},
+                  {"locations_known", v.locations_known}});
 }
 
 // A data frame of `data`; a remote frame (remote_dlc) asks for that many bytes and carries none.
@@ -400,9 +442,18 @@ std::vector<ChannelSpec> known_channels() {
   add(topics::kPresence, "ValvePresence",
       {presence(kA, 0xD8, true, 0xABCDEF, false, kBase + 1, "boom-left"),
        presence(kB, 0xF7, false, 0x000001, true, kAbove53, k64),
-       presence(kC, 0xE0, true, 0xFFFFFF, false, 0xFFFFFFFFFFFFFFFFULL, "")});
+       presence(kC, 0xE0, true, 0xFFFFFF, false, 0xFFFFFFFFFFFFFFFFULL, "",
+                "section-32-chars-abcdefghijklmno")});
   // Offline: the gateway disposes the instance; the sample carries its key only.
   add(topics::kPresence, "ValvePresence", {presence(kB, 0, false, 0, false, 0, "")}, true);
+  // string<32>'s bound, the last role and state, a full-turn place.
+  add(topics::kLocation, "ValveLocation",
+      {location(
+           {"left-master", "boom-left", 1, ROLE_MASTER, true, kA, LOCATION_OK, true, 0.0F, 360.0F}),
+       location({"section-32-chars-abcdefghijklmno", k64, 9999, ROLE_OTHER, false, 0,
+                 LOCATION_EMPTY, false, 0.0F, 0.0F}),
+       location({"section-02", "boom-left", 3, ROLE_SECTION, true, 0xFFFFFF, LOCATION_MISSING, true,
+                 12.5F, 90.0F})});
   add(topics::topic_name<ValveVersion>(), "ValveVersion",
       {version(kA, software(1, 2, 'e'), software(0, 9, '\0'), kBase + 2),
        version(kB, software(255, 0, 'z'), software(3, 14, 'a'), kAbove53 + 2)});
@@ -474,7 +525,8 @@ std::vector<ChannelSpec> known_channels() {
                        32,
                        kBase + 35,
                        8,
-                       {100001, 100002, 0xFFFFFFFF}}),
+                       {100001, 100002, 0xFFFFFFFF},
+                       6}),
        gateway_status({k64,
                        "vcan31",
                        BUS_OFF,
@@ -488,7 +540,8 @@ std::vector<ChannelSpec> known_channels() {
                        0,
                        kAbove53 + 35,
                        0xFFFFFFFF,
-                       {}})});
+                       {},
+                       0xFFFFFFFF})});
   // Every data length 0..8, standard and extended identifiers, both directions.
   std::vector<Sample> frames;
   for (std::uint8_t length = 0; length <= 8; ++length) {

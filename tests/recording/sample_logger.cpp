@@ -39,7 +39,20 @@ json fields(const teejet::ValvePresence& s) {
           {"part_number", s.part_number()},
           {"boot_mode", s.boot_mode()},
           {"last_seen_ns", u64(s.last_seen_ns())},
-          {"gateway", s.gateway().to_string()}};
+          {"gateway", s.gateway().to_string()},
+          {"location", s.location().to_string()}};
+}
+json fields(const teejet::ValveLocation& s) {
+  return {{"location", s.location().to_string()},
+          {"gateway", s.gateway().to_string()},
+          {"order", s.order()},
+          {"role", static_cast<int>(s.role())},
+          {"assigned", s.assigned()},
+          {"serial", s.serial()},
+          {"state", static_cast<int>(s.state())},
+          {"mechanics_known", s.mechanics_known()},
+          {"closed_degrees", s.closed_degrees()},
+          {"opened_degrees", s.opened_degrees()}};
 }
 json fields(const teejet::ValveVersion& s) {
   return {{"serial", s.serial()},
@@ -132,7 +145,8 @@ json fields(const teejet::GatewayStatus& s) {
           {"valves_known", s.valves_known()},
           {"stamp_ns", u64(s.stamp_ns())},
           {"gateways_seen", s.gateways_seen()},
-          {"serials_online", s.serials_online()}};
+          {"serials_online", s.serials_online()},
+          {"locations_known", s.locations_known()}};
 }
 json fields(const teejet::BusFrame& s) {
   return {{"gateway", s.gateway().to_string()},
@@ -224,6 +238,7 @@ int main(int argc, char** argv) {
   auto& p = **participant;
   std::vector<std::unique_ptr<AnyReader>> readers;
   readers.push_back(open<teejet::ValvePresence>(p, true, true));
+  readers.push_back(open<teejet::ValveLocation>(p, true, true));
   readers.push_back(open<teejet::ValvePosition>(p, true, true));
   readers.push_back(open<teejet::ValveVersion>(p, true, true));
   readers.push_back(open<teejet::ValveTemperature>(p, true, true));
