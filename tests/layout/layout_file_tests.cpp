@@ -127,14 +127,22 @@ TEST(LayoutFile, ASaveReplacesTheFileAndKeepsItsPermissions) {
 
 TEST(LayoutFile, ASaveThatCannotBeWrittenSaysWhyAndLeavesNothing) {
   testing::ScratchDir dir;
-  const auto path = (dir / "missing" / "layout.yaml").string();
-  const auto saved = save_layout_file(path, Layout{});
+  const auto missing = (dir / "missing" / "layout.yaml").string();
+  const auto saved = save_layout_file(missing, Layout{});
   ASSERT_FALSE(saved);
   EXPECT_EQ(saved.error().code, ErrorCode::kSystem);
-  EXPECT_NE(saved.error().reason.find("cannot create a file beside '" + path + "'"),
+  EXPECT_NE(saved.error().reason.find("cannot create a file beside '" + missing + "'"),
             std::string::npos)
       << saved.error().reason;
-  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+  // Written whole, then refused at the rename (a directory is in the way): the written file goes.
+  std::filesystem::create_directory(dir / "layout.yaml");
+  const auto blocked = save_layout_file((dir / "layout.yaml").string(), Layout{});
+  ASSERT_FALSE(blocked);
+  EXPECT_NE(blocked.error().reason.find("cannot replace"), std::string::npos)
+      << blocked.error().reason;
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                          std::filesystem::directory_iterator{}),
+            1);
 }
 
 }  // namespace

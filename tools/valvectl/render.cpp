@@ -74,6 +74,12 @@ std::string aligned(const std::vector<Column>& columns,
   return out.str();
 }
 
+// The valve at `place` when it is there to be seen: its gateway alive and the place ok.
+std::optional<ValveRow> valve_at(const ValveTable& table, const LocationRow& place) {
+  if (!place.serial || place.gateway_lost || place.state != LOCATION_OK) return std::nullopt;
+  return table.row(*place.serial);
+}
+
 // Online valves that sit in no place, of gateways that have places.
 std::vector<ValveRow> unassigned(const ValveTable& table) {
   std::set<std::string> with_places;
@@ -134,16 +140,15 @@ std::string render_layout(const ValveTable& table) {
   std::vector<std::vector<std::string>> cells;
   std::map<std::string, std::vector<std::string>> gateways_of;
   for (const LocationRow& place : table.locations()) {
-    const auto valve = place.serial ? table.row(*place.serial) : std::nullopt;
-    const bool here = valve && !place.gateway_lost && place.state == LOCATION_OK;
+    const auto valve = valve_at(table, place);
     cells.push_back({
         std::to_string(place.order),
         place.name,
         std::string(dds::to_string(place.role)),
         place.serial ? codec::format_serial(*place.serial) : "-",
         place.gateway_lost ? "unknown" : std::string(dds::to_string(place.state)),
-        here && valve->position_degrees() ? one_decimal(*valve->position_degrees()) : "-",
-        here ? address_text(valve->address) : "-",
+        valve && valve->position_degrees() ? one_decimal(*valve->position_degrees()) : "-",
+        valve ? address_text(valve->address) : "-",
         place.gateway,
     });
     gateways_of[place.name].push_back(place.gateway);
@@ -172,16 +177,15 @@ nlohmann::json layout_json(const ValveTable& table) {
     return *value;
   };
   for (const LocationRow& place : table.locations()) {
-    const auto valve = place.serial ? table.row(*place.serial) : std::nullopt;
-    const bool here = valve && !place.gateway_lost && place.state == LOCATION_OK;
+    const auto valve = valve_at(table, place);
     places.push_back({
         {"order", place.order},
         {"location", place.name},
         {"role", dds::to_string(place.role)},
         {"serial", place.serial ? nlohmann::json(codec::format_serial(*place.serial)) : nullptr},
         {"state", place.gateway_lost ? "unknown" : dds::to_string(place.state)},
-        {"position", here ? optional(valve->position_degrees()) : nullptr},
-        {"address", here ? nlohmann::json(valve->address) : nullptr},
+        {"position", valve ? optional(valve->position_degrees()) : nullptr},
+        {"address", valve ? nlohmann::json(valve->address) : nullptr},
         {"gateway", place.gateway},
         {"closed_deg", optional(place.closed_degrees)},
         {"opened_deg", optional(place.opened_degrees)},
