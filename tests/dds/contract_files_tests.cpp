@@ -36,9 +36,11 @@ std::set<std::pair<std::string, std::string>> topics_and_types(topics::SampleTyp
   return {{topics::topic_name<Samples>(), typename PubSubTypeOf<Samples>::type().getName()}...};
 }
 
+// Commands and layout changes: what a commander asks of a gateway.
 std::set<std::string> every_topic_but_commands() {
   auto topics = topics_of(topics::EverySampleType{});
   topics.erase(topics::kCommand);
+  topics.erase(topics::kLayoutChange);
   return topics;
 }
 
@@ -60,8 +62,14 @@ std::set<std::string> role_topics(const std::string& role, const std::string& di
 TEST(ContractFiles, TheGatewayRolePublishesEveryTopicButCommandsAndReadsCommandsAndStatus) {
   EXPECT_EQ(role_topics("gateway", "publish"), every_topic_but_commands())
       << "config/security/roles/gateway.xml";
-  EXPECT_EQ(role_topics("gateway", "subscribe"),
-            (std::set<std::string>{topics::kCommand, topics::kGatewayStatus}));
+  EXPECT_EQ(
+      role_topics("gateway", "subscribe"),
+      (std::set<std::string>{topics::kCommand, topics::kLayoutChange, topics::kGatewayStatus}));
+}
+
+TEST(ContractFiles, TheCommanderRoleWritesCommandsAndLayoutChangesOnly) {
+  EXPECT_EQ(role_topics("commander", "publish"),
+            (std::set<std::string>{topics::kCommand, topics::kLayoutChange}));
 }
 
 TEST(ContractFiles, TheObserverRoleReadsEveryTopicButCommands) {

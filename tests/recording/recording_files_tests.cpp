@@ -356,11 +356,12 @@ TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
 }
 
 TEST(RecordingTopics, GlobsSelectCatalogTopicsAndRefuseStrays) {
-  EXPECT_EQ(record::select_topics({})->size(), 17u);
+  EXPECT_EQ(record::select_topics({})->size(), 19u);
   const auto valves = record::select_topics({"teejet/valve/*"});
   ASSERT_TRUE(valves.ok());
   EXPECT_EQ(valves->size(), 15u);
   EXPECT_EQ(valves->front(), "teejet/valve/presence");
+  EXPECT_EQ(record::select_topics({"teejet/layout/*"})->size(), 2u);
   EXPECT_EQ(*record::select_topics({"*frame", "teejet/gateway/status"}),
             (std::vector<std::string>{"teejet/gateway/status", "teejet/can/frame"}));
   const auto stray = record::select_topics({"teejet/valve/postion"});

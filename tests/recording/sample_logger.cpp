@@ -131,6 +131,22 @@ json fields(const teejet::CommandStatus& s) {
           {"reason", s.reason().to_string()},
           {"stamp_ns", u64(s.stamp_ns())}};
 }
+json fields(const teejet::LayoutChange& s) {
+  return {{"location", s.location().to_string()},
+          {"gateway", s.gateway().to_string()},
+          {"change_id", s.change_id()},
+          {"origin", s.origin().to_string()},
+          {"kind", static_cast<int>(s.kind())},
+          {"serial", s.serial()},
+          {"move", s.move()}};
+}
+json fields(const teejet::LayoutChangeStatus& s) {
+  return {{"location", s.location().to_string()}, {"gateway", s.gateway().to_string()},
+          {"change_id", s.change_id()},           {"origin", s.origin().to_string()},
+          {"kind", static_cast<int>(s.kind())},   {"serial", s.serial()},
+          {"state", static_cast<int>(s.state())}, {"reason", s.reason().to_string()},
+          {"stamp_ns", u64(s.stamp_ns())}};
+}
 json fields(const teejet::GatewayStatus& s) {
   return {{"gateway", s.gateway().to_string()},
           {"can_interface", s.can_interface().to_string()},
@@ -252,6 +268,8 @@ int main(int argc, char** argv) {
   readers.push_back(open<teejet::ValveError>(p, true, true));
   readers.push_back(open<teejet::ValveCommand>(p, true, false));
   readers.push_back(open<teejet::CommandStatus>(p, true, true));
+  readers.push_back(open<teejet::LayoutChange>(p, true, false));
+  readers.push_back(open<teejet::LayoutChangeStatus>(p, true, true));
   readers.push_back(open<teejet::GatewayStatus>(p, true, true));
   readers.push_back(open<teejet::BusFrame>(p, false, false));
 

@@ -206,10 +206,12 @@ Result<std::unique_ptr<TopicWriter>> open_writer(dds::Participant& participant, 
 
 // Commands and frames are events, statuses are kept 32 deep; everything else is state.
 template <class Sample>
-constexpr Kind kKindOf = std::is_same_v<Sample, ValveCommand>    ? Kind::kCommand
-                         : std::is_same_v<Sample, CommandStatus> ? Kind::kCommandStatus
-                         : std::is_same_v<Sample, BusFrame>      ? Kind::kFrame
-                                                                 : Kind::kState;
+constexpr Kind kKindOf =
+    std::is_same_v<Sample, ValveCommand> || std::is_same_v<Sample, LayoutChange> ? Kind::kCommand
+    : std::is_same_v<Sample, CommandStatus> || std::is_same_v<Sample, LayoutChangeStatus>
+        ? Kind::kCommandStatus
+    : std::is_same_v<Sample, BusFrame> ? Kind::kFrame
+                                       : Kind::kState;
 
 template <class Sample>
 TopicType entry() {

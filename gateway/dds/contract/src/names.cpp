@@ -102,4 +102,24 @@ std::string_view to_string(LocationState state) {
   return "unknown";
 }
 
+std::string_view to_string(LayoutChangeKind kind) {
+  switch (kind) {
+    case LAYOUT_ASSIGN:
+      return "assign";
+    case LAYOUT_UNASSIGN:
+      return "unassign";
+  }
+  return "unknown";
+}
+
+std::string_view to_string(LayoutChangeState state) {
+  switch (state) {
+    case LAYOUT_CHANGE_APPLIED:
+      return "applied";
+    case LAYOUT_CHANGE_REJECTED:
+      return "rejected";
+  }
+  return "unknown";
+}
+
 }  // namespace teejet::dds

@@ -17,7 +17,9 @@ std::string_view to_string(ErrorKind kind);       // "high_voltage", ..., "min_d
 std::string_view to_string(Telemetry telemetry);  // "version", "position", ..., "cycle_counts"
 std::string_view to_string(BusState state);       // "error_active", ..., "bus_off", "down"
 // The layout's words (teejet/layout/layout.hpp, held equal by bridge_tests).
-std::string_view to_string(LocationRole role);    // "section", "master", "rate", "other"
-std::string_view to_string(LocationState state);  // "ok", "missing", "empty"
+std::string_view to_string(LocationRole role);        // "section", "master", "rate", "other"
+std::string_view to_string(LocationState state);      // "ok", "missing", "empty"
+std::string_view to_string(LayoutChangeKind kind);    // "assign", "unassign"
+std::string_view to_string(LayoutChangeState state);  // "applied", "rejected"
 
 }  // namespace teejet::dds

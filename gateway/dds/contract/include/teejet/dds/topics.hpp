@@ -21,6 +21,8 @@ inline constexpr const char* kLocation = "teejet/valve/location";
 inline constexpr const char* kError = "teejet/valve/error";
 inline constexpr const char* kCommand = "teejet/valve/command";
 inline constexpr const char* kCommandStatus = "teejet/valve/command_status";
+inline constexpr const char* kLayoutChange = "teejet/layout/change";
+inline constexpr const char* kLayoutChangeStatus = "teejet/layout/change_status";
 inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
 inline constexpr const char* kBusFrame = "teejet/can/frame";
 // Telemetry: "teejet/valve/" and the subject of the message the sample carries (the codec's
@@ -37,6 +39,8 @@ inline std::string topic_of(std::type_identity<ValveLocation>) { return kLocatio
 inline std::string topic_of(std::type_identity<ValveError>) { return kError; }
 inline std::string topic_of(std::type_identity<ValveCommand>) { return kCommand; }
 inline std::string topic_of(std::type_identity<CommandStatus>) { return kCommandStatus; }
+inline std::string topic_of(std::type_identity<LayoutChange>) { return kLayoutChange; }
+inline std::string topic_of(std::type_identity<LayoutChangeStatus>) { return kLayoutChangeStatus; }
 inline std::string topic_of(std::type_identity<GatewayStatus>) { return kGatewayStatus; }
 inline std::string topic_of(std::type_identity<BusFrame>) { return kBusFrame; }
 
@@ -63,14 +67,14 @@ Result<eprosima::fastdds::dds::Topic*> topic_of(Participant& participant) {
 }
 
 // Every sample type of the contract, in the order of docs/topics.md: presence, the locations,
-// the telemetry (errors last), the commands and their statuses, the gateways' status and the raw
-// frames.
+// the telemetry (errors last), the commands and their statuses, the layout changes and theirs,
+// the gateways' status and the raw frames.
 template <class... Samples>
 struct SampleTypes {};
 template <class... Telemetry>
 constexpr auto every_sample_type(std::type_identity<std::variant<Telemetry...>>) {
   return SampleTypes<ValvePresence, ValveLocation, Telemetry..., ValveCommand, CommandStatus,
-                     GatewayStatus, BusFrame>{};
+                     LayoutChange, LayoutChangeStatus, GatewayStatus, BusFrame>{};
 }
 using EverySampleType = decltype(every_sample_type(std::type_identity<TelemetrySample>{}));
 
@@ -86,17 +90,18 @@ eprosima::fastdds::dds::DataReaderQos state_reader_qos();
 // writer offering none (another vendor's, an older gateway) does not match it.
 eprosima::fastdds::dds::DataReaderQos liveliness_reader_qos();
 
-// Commands: RELIABLE, VOLATILE, KEEP_ALL (up to 256 queued per valve, writers heartbeat every
-// 100 ms so acknowledgements free them promptly), so no command is lost;
-// automatic liveliness with a 2 s lease lets the gateway notice a vanished commander.
+// Commands (and layout changes): RELIABLE, VOLATILE, KEEP_ALL (up to 256 queued per valve, writers
+// heartbeat every 100 ms so acknowledgements free them promptly), so no command is lost; automatic
+// liveliness with a 2 s lease lets the gateway notice a vanished commander.
 eprosima::fastdds::dds::DataWriterQos command_writer_qos();
 eprosima::fastdds::dds::DataReaderQos command_reader_qos();
 
-// Command status: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 32 per valve: a reader that keeps up sees
-// every transition; one that does not never stalls the gateway; and one that the gateway matched
-// a moment before the reader matched the gateway still gets its ACCEPTED (the two sides of a
-// match do not happen at once: a VOLATILE reader starts after the first heartbeat it hears and
-// loses what that heartbeat already counted; measured with CycloneDDS 0.10, issue 8).
+// Command status (and layout change status): RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 32 per valve: a
+// reader that keeps up sees every transition; one that does not never stalls the gateway; and one
+// that the gateway matched a moment before the reader matched the gateway still gets its ACCEPTED
+// (the two sides of a match do not happen at once: a VOLATILE reader starts after the first
+// heartbeat it hears and loses what that heartbeat already counted; measured with CycloneDDS 0.10,
+// issue 8).
 eprosima::fastdds::dds::DataWriterQos status_writer_qos();
 eprosima::fastdds::dds::DataReaderQos status_reader_qos();
 
