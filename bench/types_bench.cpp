@@ -38,6 +38,7 @@ struct CountingSink final : bridge::Sink {
   void telemetry(const dds::TelemetrySample&) override { ++samples; }
   void error_cleared(std::uint32_t, ErrorKind) override {}
   void command_status(const CommandStatus&) override {}
+  void layout_change_status(const LayoutChangeStatus&) override {}
   void gateway_status(const GatewayStatus&) override {}
 };
 

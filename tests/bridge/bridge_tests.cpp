@@ -772,5 +772,189 @@ TEST_F(BridgeTest, EveryRoleKeepsItsLayoutNameOnDds) {
   }
 }
 
+// ---- Layout changes: a valve put at its place without editing files -----------------------
+
+class MemoryLayoutStore final : public layout::LayoutStore {
+ public:
+  Status save(const layout::Layout& layout) override {
+    if (refusal) return *refusal;
+    saved.push_back(layout);
+    return {};
+  }
+  std::vector<layout::Layout> saved;
+  std::optional<Error> refusal;
+};
+
+LayoutChange layout_change(LayoutChangeKind kind, const std::string& location,
+                           std::uint32_t serial = 0, bool move = false,
+                           const std::string& gateway = "gw-test") {
+  static std::uint32_t next_id = 1;
+  LayoutChange change;
+  change.location(location);
+  change.gateway(gateway);
+  change.change_id(next_id++);
+  change.origin(kEcu);
+  change.kind(kind);
+  change.serial(serial);
+  change.move(move);
+  return change;
+}
+
+class BridgeLayoutChange : public BridgeTest {
+ protected:
+  BridgeConfig boom_config() {
+    auto c = config();
+    c.layout = boom_layout();
+    return c;
+  }
+  // The status that answered `change`, which must be the only one for it.
+  LayoutChangeStatus answer_to(const LayoutChange& change) {
+    std::vector<LayoutChangeStatus> answers;
+    for (const auto& status : sink.layout_statuses()) {
+      if (status.change_id() == change.change_id()) answers.push_back(status);
+    }
+    EXPECT_EQ(answers.size(), 1u);
+    return answers.empty() ? LayoutChangeStatus{} : answers.front();
+  }
+  MemoryLayoutStore store;
+};
+
+TEST_F(BridgeLayoutChange, AnAssignmentIsSavedThenPublishedAndAnswered) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xDB, 7, kStart);
+  EXPECT_EQ(sink.last_presence(7)->sample.location().to_string(), "");
+  const auto change = layout_change(LAYOUT_ASSIGN, "section-02", 7);
+  bridge.on_layout_change(change);
+
+  ASSERT_EQ(store.saved.size(), 1u);
+  EXPECT_EQ(store.saved[0].find("section-02")->serial, 7u);
+  EXPECT_EQ(store.saved[0], bridge.current_layout());
+  const auto place = sink.latest_locations().at("section-02");
+  EXPECT_EQ(place.serial(), 7u);
+  EXPECT_EQ(place.state(), LOCATION_OK);
+  EXPECT_EQ(sink.last_presence(7)->sample.location().to_string(), "section-02");
+  const auto answer = answer_to(change);
+  EXPECT_EQ(answer.state(), LAYOUT_CHANGE_APPLIED);
+  EXPECT_EQ(answer.location().to_string(), "section-02");
+  EXPECT_EQ(answer.gateway().to_string(), "gw-test");
+  EXPECT_EQ(answer.origin().to_string(), kEcu);
+  EXPECT_EQ(answer.serial(), 7u);
+  EXPECT_EQ(answer.reason().to_string(), "");
+}
+
+TEST_F(BridgeLayoutChange, AReplacementTakesThePlaceOfTheOldSerialWhichSitsNowhere) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xD9, 2, kStart);
+  announce(bridge, 0xDA, 9, kStart);
+  const auto change = layout_change(LAYOUT_ASSIGN, "section-01", 9);
+  bridge.on_layout_change(change);
+  EXPECT_EQ(answer_to(change).reason().to_string(), "TJV000002 left it");
+  EXPECT_EQ(sink.latest_locations().at("section-01").serial(), 9u);
+  EXPECT_EQ(sink.last_presence(9)->sample.location().to_string(), "section-01");
+  EXPECT_EQ(sink.last_presence(2)->sample.location().to_string(), "");
+  // The place keeps its own mechanics: they belong to the place, not to the valve that left.
+  EXPECT_EQ(sink.latest_locations().at("section-01").opened_degrees(), 80.0f);
+}
+
+TEST_F(BridgeLayoutChange, AMoveEmptiesThePlaceTheValveCameFrom) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xD8, 1, kStart);
+  const auto refused = layout_change(LAYOUT_ASSIGN, "section-02", 1);
+  bridge.on_layout_change(refused);
+  EXPECT_EQ(answer_to(refused).state(), LAYOUT_CHANGE_REJECTED);
+  EXPECT_EQ(answer_to(refused).reason().to_string(),
+            "TJV000001 sits at left-master; unassign it there first, or move it");
+  const auto moved = layout_change(LAYOUT_ASSIGN, "section-02", 1, /*move=*/true);
+  bridge.on_layout_change(moved);
+  EXPECT_EQ(answer_to(moved).state(), LAYOUT_CHANGE_APPLIED);
+  EXPECT_EQ(answer_to(moved).reason().to_string(), "TJV000001 left left-master");
+  EXPECT_EQ(sink.latest_locations().at("left-master").state(), LOCATION_EMPTY);
+  EXPECT_EQ(sink.latest_locations().at("section-02").state(), LOCATION_OK);
+  EXPECT_EQ(store.saved.size(), 1u);
+}
+
+TEST_F(BridgeLayoutChange, AnUnassignedPlaceIsEmptyAndItsValveSitsNowhere) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xD9, 2, kStart);
+  const auto change = layout_change(LAYOUT_UNASSIGN, "section-01");
+  bridge.on_layout_change(change);
+  EXPECT_EQ(answer_to(change).state(), LAYOUT_CHANGE_APPLIED);
+  EXPECT_EQ(answer_to(change).serial(), 0u);
+  EXPECT_EQ(answer_to(change).reason().to_string(), "TJV000002 left it");
+  EXPECT_EQ(sink.latest_locations().at("section-01").state(), LOCATION_EMPTY);
+  EXPECT_EQ(sink.last_presence(2)->sample.location().to_string(), "");
+  // Nothing to do the second time: answered, not saved again.
+  const auto again = layout_change(LAYOUT_UNASSIGN, "section-01");
+  bridge.on_layout_change(again);
+  EXPECT_EQ(answer_to(again).state(), LAYOUT_CHANGE_APPLIED);
+  EXPECT_EQ(answer_to(again).reason().to_string(), "it was empty already");
+  EXPECT_EQ(store.saved.size(), 1u);
+}
+
+TEST_F(BridgeLayoutChange, RefusalsSayWhyAndChangeNothing) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xDB, 7, kStart);
+  const auto published = sink.locations().size();
+  const auto reason_of = [&](const LayoutChange& change) {
+    bridge.on_layout_change(change);
+    const auto answer = answer_to(change);
+    EXPECT_EQ(answer.state(), LAYOUT_CHANGE_REJECTED);
+    return answer.reason().to_string();
+  };
+  EXPECT_EQ(reason_of(layout_change(LAYOUT_ASSIGN, "section-09", 7)),
+            "gateway gw-test's layout has no location 'section-09'");
+  EXPECT_EQ(reason_of(layout_change(LAYOUT_ASSIGN, "section-02", 8)),
+            "TJV000008 is not online on virtual:RefusalsSayWhyAndChangeNothing (gateway "
+            "gw-test): a valve is assigned where it is fitted and announcing itself");
+  store.refusal = Error{ErrorCode::kSystem, "cannot write /etc/teejet/layout.yaml: disk full"};
+  EXPECT_EQ(reason_of(layout_change(LAYOUT_ASSIGN, "section-02", 7)),
+            "nothing changed: cannot write /etc/teejet/layout.yaml: disk full");
+  EXPECT_EQ(bridge.current_layout(), boom_layout());
+  EXPECT_EQ(sink.locations().size(), published);
+  EXPECT_EQ(sink.last_presence(7)->sample.location().to_string(), "");
+  EXPECT_TRUE(store.saved.empty());
+}
+
+TEST_F(BridgeLayoutChange, AValveOnAnotherGatewaysBusIsAssignedThere) {
+  struct Others final : OtherGateways {
+    std::vector<std::string> reporting_online(std::uint32_t serial) const override {
+      return serial == 7 ? std::vector<std::string>{"rig-2"} : std::vector<std::string>{};
+    }
+  } others;
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, &others, &store);
+  const auto change = layout_change(LAYOUT_ASSIGN, "section-02", 7);
+  bridge.on_layout_change(change);
+  EXPECT_EQ(answer_to(change).reason().to_string(),
+            "TJV000007 is online on the bus of gateway rig-2, not of this one: assign it there");
+}
+
+TEST_F(BridgeLayoutChange, AChangeForAnotherGatewayIsNotThisOnesToAnswer) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xDB, 7, kStart);
+  bridge.on_layout_change(layout_change(LAYOUT_ASSIGN, "section-02", 7, false, "rig-2"));
+  EXPECT_TRUE(sink.layout_statuses().empty());
+  EXPECT_TRUE(store.saved.empty());
+}
+
+TEST_F(BridgeLayoutChange, WithoutALayoutFileChangesAreRefused) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock);
+  announce(bridge, 0xDB, 7, kStart);
+  const auto change = layout_change(LAYOUT_ASSIGN, "section-02", 7);
+  bridge.on_layout_change(change);
+  EXPECT_EQ(answer_to(change).reason().to_string(),
+            "nothing changed: gateway gw-test has no layout file to keep it in (started without "
+            "layout_file: or --layout)");
+}
+
+TEST_F(BridgeLayoutChange, AValvePutAtAPlaceMovesWithinThatPlacesMechanics) {
+  Bridge bridge(boom_config(), gateway_bus, sink, clock, nullptr, &store);
+  announce(bridge, 0xDB, 7, kStart);
+  // section-01 opens to 80 degrees (the default: 90): the valve stops there short of 120.
+  bridge.on_layout_change(layout_change(LAYOUT_ASSIGN, "section-01", 7));
+  command_at(bridge, kStart + 1s, from(kEcu, 70, move_to(7, 120.0f)));
+  deliver(bridge, from_valve(0xDB, codec::Position{80.0}, kStart + 2s));
+  EXPECT_EQ(sink.states_of(70), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+}
+
 }  // namespace
 }  // namespace teejet::bridge

@@ -42,6 +42,11 @@ void RecordingSink::command_status(const CommandStatus& status) {
   statuses_.push_back({status, Clock::now()});
 }
 
+void RecordingSink::layout_change_status(const LayoutChangeStatus& status) {
+  std::lock_guard lock(mutex_);
+  layout_statuses_.push_back(status);
+}
+
 void RecordingSink::gateway_status(const GatewayStatus& status) {
   std::lock_guard lock(mutex_);
   gateway_statuses_.push_back(status);
@@ -78,6 +83,11 @@ std::vector<std::pair<std::uint32_t, ErrorKind>> RecordingSink::cleared() const 
 std::vector<CommandStatus> RecordingSink::statuses() const {
   std::lock_guard lock(mutex_);
   return without_times(statuses_);
+}
+
+std::vector<LayoutChangeStatus> RecordingSink::layout_statuses() const {
+  std::lock_guard lock(mutex_);
+  return layout_statuses_;
 }
 
 std::vector<GatewayStatus> RecordingSink::gateway_statuses() const {

@@ -32,6 +32,7 @@ class RecordingSink final : public bridge::Sink {
   void telemetry(const dds::TelemetrySample& sample) override;
   void error_cleared(std::uint32_t serial, ErrorKind kind) override;
   void command_status(const CommandStatus& status) override;
+  void layout_change_status(const LayoutChangeStatus& status) override;
   void gateway_status(const GatewayStatus& status) override;
 
   std::vector<ValvePresence> presences() const;
@@ -41,6 +42,7 @@ class RecordingSink final : public bridge::Sink {
   std::vector<dds::TelemetrySample> samples() const;
   std::vector<std::pair<std::uint32_t, ErrorKind>> cleared() const;
   std::vector<CommandStatus> statuses() const;
+  std::vector<LayoutChangeStatus> layout_statuses() const;
   std::vector<GatewayStatus> gateway_statuses() const;
 
   // The states command `command_id` went through, in order.
@@ -62,6 +64,7 @@ class RecordingSink final : public bridge::Sink {
   std::vector<Arrived<dds::TelemetrySample>> samples_;
   std::vector<std::pair<std::uint32_t, ErrorKind>> cleared_;
   std::vector<Arrived<CommandStatus>> statuses_;
+  std::vector<LayoutChangeStatus> layout_statuses_;
   std::vector<GatewayStatus> gateway_statuses_;
 };
 

@@ -81,20 +81,22 @@ std::vector<codec::ToValveMessage> default_poll_schedule() {
 }
 
 Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<const Clock> clock,
-               const OtherGateways* others)
+               const OtherGateways* others, layout::LayoutStore* layout_store)
     : config_(std::move(config)),
       bus_(bus),
       sink_(sink),
       clock_(std::move(clock)),
       others_(others),
+      layout_store_(layout_store),
+      layout_(config_.layout),
       directory_(config_.offline_after),
       resent_polls_(resent_polls_of(config_.poll)),
-      tracker_(std::make_unique<CommandTracker>(config_)),
+      tracker_(std::make_unique<CommandTracker>(config_, layout_)),
       limiter_(std::make_unique<CommandRateLimiter>(config_.command_rate_per_valve,
                                                     config_.command_burst_per_valve)),
       next_status_(clock_->steady() + kStatusPeriod) {
   // Every place at once, so that an ECU resolves every name before the first valve announces.
-  for (const auto& place : config_.layout.locations()) publish_location(place, false);
+  for (const auto& place : layout_.locations()) publish_location(place, false);
 }
 
 Bridge::~Bridge() = default;
@@ -290,14 +292,14 @@ void Bridge::publish_presence(const directory::ValveRecord& valve) {
   sample.boot_mode(valve.boot_mode);
   sample.last_seen_ns(unix_nanoseconds(valve.last_seen));
   sample.gateway(config_.gateway_name);
-  const auto* place = config_.layout.find_serial(valve.serial);
+  const auto* place = layout_.find_serial(valve.serial);
   sample.location(place ? place->name : "");
   sink_.presence(sample);
   if (place) {
     publish_location(*place, valve.online);
   } else if (!valve.online) {
     reported_unassigned_.erase(valve.serial);
-  } else if (!config_.layout.empty() && reported_unassigned_.insert(valve.serial).second) {
+  } else if (!layout_.empty() && reported_unassigned_.insert(valve.serial).second) {
     spdlog::warn(
         "{} is online at {} and sits in no location of this gateway's layout; assign "
         "it to its place (docs/layout.md)",
@@ -327,7 +329,7 @@ ValveLocation Bridge::location_sample(const layout::Location& place, bool online
   sample.assigned(place.serial.has_value());
   sample.serial(place.serial.value_or(0));
   sample.state(!place.serial ? LOCATION_EMPTY : online ? LOCATION_OK : LOCATION_MISSING);
-  if (const auto mechanics = config_.layout.mechanics_of(place)) {
+  if (const auto mechanics = layout_.mechanics_of(place)) {
     sample.mechanics_known(true);
     sample.closed_degrees(static_cast<float>(mechanics->closed_degrees));
     sample.opened_degrees(static_cast<float>(mechanics->opened_degrees));
@@ -343,6 +345,134 @@ void Bridge::publish_location(const layout::Location& place, bool online) {
     published->second = sample;
   }
   sink_.location(sample);
+}
+
+// ---- Layout changes ---------------------------------------------------------------------
+
+void Bridge::on_layout_change(const LayoutChange& change) {
+  if (change.gateway().to_string() != config_.gateway_name) return;  // another gateway's layout
+  std::lock_guard one_at_a_time(layout_change_mutex_);
+  std::unique_lock lock(mutex_);
+  auto changed = changed_layout(change);
+  if (!changed) {
+    publish_layout_change(change, LAYOUT_CHANGE_REJECTED, changed.error().reason);
+    return;
+  }
+  auto& [next, what] = *changed;
+  if (next == layout_) {  // nothing to save: it is so already
+    publish_layout_change(change, LAYOUT_CHANGE_APPLIED, what);
+    return;
+  }
+  // A save may wait for the disk: the bus reader must not wait with it.
+  lock.unlock();
+  const std::string gateway = "gateway " + config_.gateway_name;
+  const Status saved = layout_store_ != nullptr
+                           ? layout_store_->save(next)
+                           : Status(Error{ErrorCode::kUnavailable,
+                                          gateway + " has no layout file to keep it in (started "
+                                                    "without layout_file: or --layout)"});
+  lock.lock();
+  if (!saved) {
+    spdlog::warn("layout change for {} refused: {}", change.location().to_string(),
+                 saved.error().reason);
+    publish_layout_change(change, LAYOUT_CHANGE_REJECTED,
+                          "nothing changed: " + saved.error().reason);
+    return;
+  }
+  const layout::Layout before = std::exchange(layout_, std::move(next));
+  publish_layout_moves(before);
+  spdlog::info("layout: {} {}{}, asked by {}; saved", change.location().to_string(),
+               change.kind() == LAYOUT_ASSIGN
+                   ? "holds " + codec::format_serial(change.serial()) + " now"
+                   : std::string("is empty now"),
+               what.empty() ? "" : " (" + what + ")", change.origin().to_string());
+  publish_layout_change(change, LAYOUT_CHANGE_APPLIED, what);
+}
+
+layout::Layout Bridge::current_layout() const {
+  std::lock_guard lock(mutex_);
+  return layout_;
+}
+
+Result<std::pair<layout::Layout, std::string>> Bridge::changed_layout(
+    const LayoutChange& change) const {
+  const std::string name = change.location().to_string();
+  const std::string gateway = "gateway " + config_.gateway_name;
+  if (layout_.find(name) == nullptr) {
+    return Error{ErrorCode::kInvalidValue, gateway + "'s layout has no location '" + name + "'" +
+                                               (layout_.empty() ? " (it has no layout)" : "")};
+  }
+  layout::Layout next = layout_;
+  if (change.kind() == LAYOUT_UNASSIGN) {
+    const auto left = next.unassign(name);
+    if (!left) return left.error();
+    return std::pair{std::move(next), *left ? codec::format_serial(**left) + " left it"
+                                            : std::string("it was empty already")};
+  }
+  const std::uint32_t serial = change.serial();
+  const std::string valve = codec::format_serial(serial);
+  const auto record = directory_.find(serial);
+  if (!record || !record->online) {
+    const auto elsewhere =
+        others_ != nullptr ? others_->reporting_online(serial) : std::vector<std::string>{};
+    if (!elsewhere.empty()) {
+      return Error{ErrorCode::kInvalidValue, valve + " is online on the bus of gateway " +
+                                                 elsewhere.front() +
+                                                 ", not of this one: assign it there"};
+    }
+    return Error{ErrorCode::kInvalidValue,
+                 valve + " is not online on " + config_.can_interface + " (" + gateway +
+                     "): a valve is assigned where it is fitted and announcing itself"};
+  }
+  const auto assigned = next.assign(name, serial, change.move());
+  if (!assigned) {
+    const Error& error = assigned.error();
+    return Error{error.code, error.complaint.empty() ? error.reason : error.complaint};
+  }
+  std::string what;
+  if (!assigned->changed) what = valve + " sat there already";
+  if (assigned->displaced) what = codec::format_serial(*assigned->displaced) + " left it";
+  if (assigned->moved_from) {
+    what += (what.empty() ? "" : "; ") + valve + " left " + *assigned->moved_from;
+  }
+  return std::pair{std::move(next), what};
+}
+
+void Bridge::publish_layout_moves(const layout::Layout& before) {
+  std::set<std::uint32_t> moved;
+  for (const auto& place : layout_.locations()) {
+    const auto* was = before.find(place.name);
+    if (was == nullptr || was->serial == place.serial) continue;
+    if (was->serial) moved.insert(*was->serial);
+    if (place.serial) moved.insert(*place.serial);
+  }
+  for (const std::uint32_t serial : moved) {
+    reported_unassigned_.erase(serial);  // said again if it sits nowhere now
+    if (const auto valve = directory_.find(serial)) {
+      publish_presence(*valve);
+    }
+  }
+  // Places of valves never heard, and emptied places, have no presence to publish them.
+  for (const auto& place : layout_.locations()) {
+    const auto valve = place.serial ? directory_.find(*place.serial) : std::nullopt;
+    publish_location(place, valve && valve->online);
+  }
+}
+
+void Bridge::publish_layout_change(const LayoutChange& change, LayoutChangeState state,
+                                   std::string reason) {
+  LayoutChangeStatus status;
+  status.location(change.location());
+  status.gateway(config_.gateway_name);
+  status.change_id(change.change_id());
+  status.origin(change.origin());
+  status.kind(change.kind());
+  const auto* place = layout_.find(change.location().to_string());
+  status.serial(place != nullptr ? place->serial.value_or(0) : 0);
+  status.state(state);
+  status.reason(std::move(reason));
+  status.stamp_ns(unix_nanoseconds(clock_->wall()));
+  sink_.layout_change_status(status);
 }
 
 // ---- Commands -----------------------------------------------------------------------------
@@ -602,7 +732,7 @@ void Bridge::publish_gateway_status() {
   status.valves_known(static_cast<std::uint32_t>(valves.size()));
   if (online.size() > kMaxSerialsOnline) online.resize(kMaxSerialsOnline);
   status.serials_online(std::move(online));
-  status.locations_known(static_cast<std::uint32_t>(config_.layout.locations().size()));
+  status.locations_known(static_cast<std::uint32_t>(layout_.locations().size()));
   status.stamp_ns(unix_nanoseconds(clock_->wall()));
   sink_.gateway_status(status);
 }

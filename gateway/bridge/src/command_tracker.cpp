@@ -96,7 +96,7 @@ void CommandTracker::sent(std::uint32_t serial, const codec::ToValveMessage& mes
   }
 
   // Target Degrees or Degrees from Position: complete when the position arrives there.
-  const auto limits = config_.layout.mechanics_of_serial(serial);
+  const auto limits = layout_.mechanics_of_serial(serial);
   tracked.target_degrees = target_of(message, valve, limits);
   // The configuration keeps assumed_dps above 0; max() keeps a bad one from dividing by zero.
   const double full_speed_dps = std::max(1u, valve.dps > 0 ? valve.dps : config_.assumed_dps);

@@ -30,7 +30,9 @@ struct Outcome {
 
 class CommandTracker {
  public:
-  explicit CommandTracker(const BridgeConfig& config) : config_(config) {}
+  // `layout` (the bridge's, which changes) gives each valve's mechanics.
+  CommandTracker(const BridgeConfig& config, const layout::Layout& layout)
+      : config_(config), layout_(layout) {}
 
   // A command that was sent to the valve: completes at once (stop, clear errors, speed 0) or is
   // followed. A run command supersedes the one the valve was working on.
@@ -91,6 +93,7 @@ class CommandTracker {
                 const std::optional<layout::Mechanics>& limits) const;  // worst case, degrees
 
   const BridgeConfig& config_;
+  const layout::Layout& layout_;
   std::map<std::uint32_t, Valve> valves_;
 };
 

@@ -154,10 +154,39 @@ std::string to_yaml(const Layout& layout) {
   return out.str();
 }
 
+namespace {
+
+constexpr std::string_view kUnique = "XXXXXX";  // mkstemp's
+
+std::filesystem::path directory_of(const std::filesystem::path& target) {
+  return target.has_parent_path() ? target.parent_path() : ".";
+}
+
+std::string temporary_prefix(const std::filesystem::path& target) {
+  return "." + target.filename().string() + ".";
+}
+
+}  // namespace
+
+std::size_t remove_unfinished_saves(const std::string& path) {
+  const std::filesystem::path target(path);
+  const std::string prefix = temporary_prefix(target);
+  std::size_t removed = 0;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(directory_of(target), error)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() == prefix.size() + kUnique.size() && name.starts_with(prefix) &&
+        entry.is_regular_file(error) && std::filesystem::remove(entry.path(), error)) {
+      ++removed;
+    }
+  }
+  return removed;
+}
+
 Status save_layout_file(const std::string& path, const Layout& layout) {
   const std::filesystem::path target(path);
-  const auto directory = target.has_parent_path() ? target.parent_path() : ".";
-  std::string temporary = (directory / ("." + target.filename().string() + ".XXXXXX")).string();
+  const auto directory = directory_of(target);
+  std::string temporary = (directory / (temporary_prefix(target) + std::string(kUnique))).string();
   const int fd = ::mkstemp(temporary.data());
   if (fd < 0) return system_error("cannot create a file beside", path, errno);
   const auto fail = [&](const std::string& what, int error) {

@@ -52,7 +52,8 @@ struct BridgeConfig {
   // several gateways on one domain) ignored, since another gateway may own the valve.
   bool reject_unknown_serials = false;
   // Where each valve sits and each place's mechanics, which the protocol cannot report: a
-  // valve whose mechanics are unknown gets its targets as sent, and relative moves wrap.
+  // valve whose mechanics are unknown gets its targets as sent, and relative moves wrap. The
+  // layout at start: LayoutChanges change the bridge's copy.
   layout::Layout layout;
 };
 
@@ -65,6 +66,7 @@ class Sink {
   virtual void telemetry(const dds::TelemetrySample& sample) = 0;
   virtual void error_cleared(std::uint32_t serial, ErrorKind kind) = 0;
   virtual void command_status(const CommandStatus& status) = 0;
+  virtual void layout_change_status(const LayoutChangeStatus& status) = 0;
   virtual void gateway_status(const GatewayStatus& status) = 0;
 };
 
@@ -90,10 +92,11 @@ struct BridgeCounters {
 
 class Bridge {
  public:
-  // `others` (may be null: none heard) must outlive the bridge.
+  // `others` (may be null: none heard) and `layout_store` (may be null: layout changes are
+  // refused) must outlive the bridge.
   Bridge(BridgeConfig config, can::Bus& bus, Sink& sink,
-         std::shared_ptr<const Clock> clock = system_clock(),
-         const OtherGateways* others = nullptr);
+         std::shared_ptr<const Clock> clock = system_clock(), const OtherGateways* others = nullptr,
+         layout::LayoutStore* layout_store = nullptr);
   ~Bridge();
   Bridge(const Bridge&) = delete;
   Bridge& operator=(const Bridge&) = delete;
@@ -106,6 +109,13 @@ class Bridge {
   // unknown. Commands for serials this gateway has not seen are ignored (another gateway may
   // own them) unless reject_unknown_serials is set.
   void on_command(const ValveCommand& command, const std::string& commander = {});
+
+  // A person's change of where a valve sits. One addressed to another gateway is ignored; any
+  // other ends in one LayoutChangeStatus: REJECTED with the reason and nothing changed, or
+  // APPLIED once the layout store saved it, its locations and presences published first.
+  // Saving happens outside the lock that the bus reader takes. Changes run one at a time.
+  void on_layout_change(const LayoutChange& change);
+  layout::Layout current_layout() const;
 
   // Offline detection, command deadlines and the once-a-second gateway status: whatever is due.
   // For the thread that reads the bus, right after it took what the bus holds: a starved reader
@@ -159,6 +169,13 @@ class Bridge {
   void publish_location(const layout::Location& place, bool online);  // when it changed
   void publish_status(const ValveCommand& command, CommandState state, const std::string& reason,
                       Timestamp stamp);
+  void publish_layout_change(const LayoutChange& change, LayoutChangeState state,
+                             std::string reason);
+  // The layout `change` makes, or why it is refused. mutex_ held.
+  Result<std::pair<layout::Layout, std::string>> changed_layout(const LayoutChange& change) const;
+  // Publishes what moved between `before` and layout_: places, and the presence of the valves
+  // that came or went. mutex_ held.
+  void publish_layout_moves(const layout::Layout& before);
   std::string unreachable_reason(const directory::ValveRecord& valve) const;
   std::string rate_limit_reason(std::uint32_t serial) const;
 
@@ -195,8 +212,11 @@ class Bridge {
   Sink& sink_;
   const std::shared_ptr<const Clock> clock_;
   const OtherGateways* const others_;
+  layout::LayoutStore* const layout_store_;
 
+  std::mutex layout_change_mutex_;  // one layout change at a time, held while it is saved
   mutable std::mutex mutex_;
+  layout::Layout layout_;  // config_.layout as changed since; the tracker reads it
   directory::ValveDirectory directory_;
   // The poll schedule's requests that a valve resends by itself, each with how long its replies
   // may stop before the gateway asks again: two I'm Here periods, or two of its resend periods

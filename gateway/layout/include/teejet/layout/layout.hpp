@@ -93,4 +93,12 @@ class Layout {
   std::optional<Mechanics> default_mechanics_;
 };
 
+// Where a gateway keeps its layout when a person changes it (LayoutFileStore: its layout file).
+class LayoutStore {
+ public:
+  virtual ~LayoutStore() = default;
+  // Saves `layout` whole. An Error says why not; the change is then refused and not applied.
+  virtual Status save(const Layout& layout) = 0;
+};
+
 }  // namespace teejet::layout

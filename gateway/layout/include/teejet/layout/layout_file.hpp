@@ -34,4 +34,18 @@ std::string to_yaml(const Layout& layout);
 // over it, and the directory flushed. The file keeps its permissions (0644 when new).
 Status save_layout_file(const std::string& path, const Layout& layout);
 
+// The files that saves of `path` interrupted by a power cut or a kill left beside it (hidden,
+// ".<name>.XXXXXX"), removed; returns how many. For the file's owner at start, before it saves.
+std::size_t remove_unfinished_saves(const std::string& path);
+
+// The gateway's own layout file: every accepted change rewrites it whole (save_layout_file).
+class LayoutFileStore final : public LayoutStore {
+ public:
+  explicit LayoutFileStore(std::string path) : path_(std::move(path)) {}
+  Status save(const Layout& layout) override { return save_layout_file(path_, layout); }
+
+ private:
+  const std::string path_;
+};
+
 }  // namespace teejet::layout
