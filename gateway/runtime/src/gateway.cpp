@@ -3,6 +3,8 @@
 #include <pthread.h>
 #include <spdlog/spdlog.h>
 
+#include "teejet/layout/layout_file.hpp"
+
 namespace teejet::gateway {
 namespace {
 
@@ -45,6 +47,17 @@ class BusRate {
   SteadyTime since_;
   std::size_t counted_ = 0;
   bool busy_;
+};
+
+// A layout written into the configuration stays the person's: the gateway never rewrites it.
+class LayoutInConfiguration final : public layout::LayoutStore {
+ public:
+  Status save(const layout::Layout&) override {
+    return Error{ErrorCode::kUnavailable,
+                 "this gateway's layout is in its configuration (layout:), which it never "
+                 "rewrites; give the layout a file of its own (layout_file:) to change it over "
+                 "DDS (docs/layout.md)"};
+  }
 };
 
 }  // namespace
@@ -95,9 +108,21 @@ Status Gateway::start() {
     observed_bus_ = observed.get();
     backend_.bus = std::move(observed);
   }
+  if (!config_.layout_file.empty()) {
+    if (const auto removed = layout::remove_unfinished_saves(config_.layout_file); removed > 0) {
+      spdlog::warn(
+          "removed {} unfinished save(s) of {} left by a power cut or a kill; the file "
+          "itself is whole",
+          removed, config_.layout_file);
+    }
+    layout_store_ = std::make_unique<layout::LayoutFileStore>(config_.layout_file);
+  } else if (config_.layout_in_config) {
+    layout_store_ = std::make_unique<LayoutInConfiguration>();
+  }
   bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_,
-                                             publisher_->other_gateways());
-  auto commands = dds::CommandSubscription::create(*participant_, lost_commanders_);
+                                             publisher_->other_gateways(), layout_store_.get());
+  auto commands = dds::CommandSubscription::create(*participant_, lost_commanders_,
+                                                   publisher_->answers_layout_changes());
   if (!commands) return fail(commands.error());
   commands_ = std::move(*commands);
 
@@ -224,6 +249,7 @@ void Gateway::take_commands(std::stop_token stop) {
     for (const auto& received : events.commands) {
       bridge_->on_command(received.command, received.writer);
     }
+    for (const auto& change : events.layout_changes) bridge_->on_layout_change(change);
     for (const auto& commander : events.lost_commanders) commander_lost(commander);
     // Valves going quiet are the bus reader's to judge (Bridge::tick).
     if (until(bridge_->next_command_deadline()) <= Duration{0}) bridge_->tick_commands();

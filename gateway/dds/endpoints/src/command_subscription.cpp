@@ -1,6 +1,7 @@
 #include "teejet/dds/command_subscription.hpp"
 
 #include <fastdds/rtps/common/Guid.h>
+#include <spdlog/spdlog.h>
 
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
@@ -52,7 +53,7 @@ CommandSubscription::CommandSubscription(Participant& participant,
       listener_(std::make_unique<LivelinessListener>(lost_)) {}
 
 Result<std::unique_ptr<CommandSubscription>> CommandSubscription::create(
-    Participant& participant, std::shared_ptr<LostCommanders> lost) {
+    Participant& participant, std::shared_ptr<LostCommanders> lost, bool layout_changes) {
   std::unique_ptr<CommandSubscription> made(new CommandSubscription(participant, std::move(lost)));
   auto topic = participant.topic<ValveCommandPubSubType>(topics::kCommand);
   if (!topic) return topic.error();
@@ -66,6 +67,23 @@ Result<std::unique_ptr<CommandSubscription>> CommandSubscription::create(
   made->wait_set_.attach_condition(data);
   made->wait_set_.attach_condition(made->lost_->attention());
   made->wait_set_.attach_condition(made->wake_);
+  if (layout_changes) {
+    auto changes = participant.topic<LayoutChangePubSubType>(topics::kLayoutChange);
+    auto layout_reader = changes ? participant.reader(*changes, topics::command_reader_qos(),
+                                                      nullptr, StatusMask::none())
+                                 : Result<DataReader*>(changes.error());
+    if (!layout_reader) {
+      spdlog::warn(
+          "cannot read {} ({}): this gateway takes no layout changes over DDS (valvectl assign); "
+          "give the gateway role subscribe permission for it (config/security/roles/gateway.xml)",
+          topics::kLayoutChange, layout_reader.error().reason);
+      return made;
+    }
+    made->layout_reader_ = *layout_reader;
+    StatusCondition& changed = made->layout_reader_->get_statuscondition();
+    changed.set_enabled_statuses(StatusMask::data_available());
+    made->wait_set_.attach_condition(changed);
+  }
   return made;
 }
 
@@ -73,6 +91,10 @@ CommandSubscription::~CommandSubscription() {
   if (reader_ != nullptr) {
     (void)wait_set_.detach_condition(reader_->get_statuscondition());
     participant_.delete_reader(reader_);  // no callback reaches listener_ after this
+  }
+  if (layout_reader_ != nullptr) {
+    (void)wait_set_.detach_condition(layout_reader_->get_statuscondition());
+    participant_.delete_reader(layout_reader_);
   }
   (void)wait_set_.detach_condition(lost_->attention());
   (void)wait_set_.detach_condition(wake_);
@@ -88,6 +110,12 @@ CommandSubscription::Events CommandSubscription::wait(Duration timeout) {
   SampleInfo info;
   while (reader_->take_next_sample(&command, &info) == ReturnCode_t::RETCODE_OK) {
     if (info.valid_data) events.commands.push_back({command, writer_id(info.publication_handle)});
+  }
+  if (layout_reader_ != nullptr) {
+    LayoutChange change;
+    while (layout_reader_->take_next_sample(&change, &info) == ReturnCode_t::RETCODE_OK) {
+      if (info.valid_data) events.layout_changes.push_back(change);
+    }
   }
   events.lost_commanders = lost_->take();
   return events;

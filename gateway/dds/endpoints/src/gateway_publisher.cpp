@@ -38,6 +38,15 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
       !created) {
     return created.error();
   }
+  if (auto created = made->layout_status_.create(participant, topics::status_writer_qos());
+      created) {
+    made->layout_status_ready_ = true;
+  } else {
+    spdlog::warn(
+        "cannot write {} ({}): this gateway takes no layout changes over DDS (valvectl assign); "
+        "give the gateway role publish permission for it (config/security/roles/gateway.xml)",
+        topics::kLayoutChangeStatus, created.error().reason);
+  }
   auto peers =
       PeerGateways::create(participant, gateway_name, made->state_.writer<GatewayStatus>()->guid());
   if (peers) {
@@ -79,6 +88,10 @@ void GatewayPublisher::error_cleared(std::uint32_t serial, ErrorKind kind) {
 
 void GatewayPublisher::command_status(const CommandStatus& status) {
   report(topics::kCommandStatus, command_status_.write(status, 0));
+}
+
+void GatewayPublisher::layout_change_status(const LayoutChangeStatus& status) {
+  if (layout_status_ready_) report(topics::kLayoutChangeStatus, layout_status_.write(status, 0));
 }
 
 void GatewayPublisher::gateway_status(const GatewayStatus& status) {

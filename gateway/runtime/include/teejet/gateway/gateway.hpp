@@ -53,8 +53,9 @@ class Gateway {
   std::shared_ptr<dds::LostCommanders> lost_commanders_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<dds::GatewayPublisher> publisher_;
-  std::unique_ptr<dds::FramePublisher> frames_;  // with record_frames only
-  can::ObservedBus* observed_bus_ = nullptr;     // backend_.bus while frames_ observes it
+  std::unique_ptr<dds::FramePublisher> frames_;        // with record_frames only
+  can::ObservedBus* observed_bus_ = nullptr;           // backend_.bus while frames_ observes it
+  std::unique_ptr<layout::LayoutStore> layout_store_;  // config_.layout_file's keeper
   std::unique_ptr<bridge::Bridge> bridge_;
   std::unique_ptr<dds::CommandSubscription> commands_;
   std::jthread reader_;

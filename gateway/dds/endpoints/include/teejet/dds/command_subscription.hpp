@@ -46,18 +46,22 @@ class CommandSubscription {
   // ids, or GUID prefixes of participants whose lease expired).
   struct Events {
     std::vector<Received> commands;
+    std::vector<LayoutChange> layout_changes;
     std::vector<std::string> lost_commanders;
   };
 
-  // `lost` also collects what the participant's on_participant_dropped reports.
+  // `lost` also collects what the participant's on_participant_dropped reports. With
+  // `layout_changes`, layout changes are taken too, when DDS-Security lets this participant read
+  // them (a warning says when it does not).
   static Result<std::unique_ptr<CommandSubscription>> create(Participant& participant,
-                                                             std::shared_ptr<LostCommanders> lost);
+                                                             std::shared_ptr<LostCommanders> lost,
+                                                             bool layout_changes = false);
   ~CommandSubscription();  // detaches the listener and deletes the reader, in that order
   CommandSubscription(const CommandSubscription&) = delete;
   CommandSubscription& operator=(const CommandSubscription&) = delete;
 
-  // Waits until commands or a lost commander arrive, wake() is called or `timeout` passes, and
-  // takes what there is. One thread calls it.
+  // Waits until commands, layout changes or a lost commander arrive, wake() is called or `timeout`
+  // passes, and takes what there is. One thread calls it.
   Events wait(Duration timeout);
 
   // Makes a wait() return now (to stop, or to look at a new deadline). Any thread.
@@ -73,6 +77,7 @@ class CommandSubscription {
   eprosima::fastdds::dds::GuardCondition wake_;
   std::unique_ptr<LivelinessListener> listener_;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  eprosima::fastdds::dds::DataReader* layout_reader_ = nullptr;
   eprosima::fastdds::dds::WaitSet wait_set_;
 };
 

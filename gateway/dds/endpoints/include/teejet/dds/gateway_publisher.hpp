@@ -91,12 +91,17 @@ class GatewayPublisher final : public bridge::Sink {
   void telemetry(const TelemetrySample& sample) override;
   void error_cleared(std::uint32_t serial, ErrorKind kind) override;
   void command_status(const CommandStatus& status) override;
+  void layout_change_status(const LayoutChangeStatus& status) override;
   void gateway_status(const GatewayStatus& status) override;
 
   // Waits until every matched reader acknowledged the statuses written so far, or `timeout`
   // passes: the last statuses of a shutdown must not go down with the writer. True when all
   // were acknowledged.
   bool wait_for_statuses(Duration timeout);
+
+  // False when DDS-Security permissions made before layout changes existed do not let the
+  // gateway answer them: it then neither takes them (a warning says what to grant).
+  bool answers_layout_changes() const { return layout_status_ready_; }
 
   // What the other gateways report (nullptr when their status cannot be read): for the bridge,
   // which refuses commands to a serial that another gateway reports online too.
@@ -113,6 +118,8 @@ class GatewayPublisher final : public bridge::Sink {
   SampleWriters<TelemetrySample> telemetry_;
   SampleWriters<StateSample> state_;
   SampleWriters<std::variant<CommandStatus>> command_status_;
+  SampleWriters<std::variant<LayoutChangeStatus>> layout_status_;
+  bool layout_status_ready_ = false;
   std::unique_ptr<PeerGateways> peers_;
 };
 
