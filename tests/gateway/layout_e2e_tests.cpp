@@ -9,7 +9,9 @@
 
 #include "gateway_fixture.hpp"
 #include "support/dds_peer.hpp"
+#include "support/scratch_dir.hpp"
 #include "support/subprocess.hpp"
+#include "teejet/layout/layout_file.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -91,6 +93,85 @@ TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   EXPECT_EQ(json["locations"][3]["serial"], "TJV000003");
   EXPECT_EQ(json["locations"][3]["address"], 0xDA);
   EXPECT_EQ(json["unassigned"].dump(), R"(["TJV000006"])");
+  gateway->stop();
+}
+
+// valvectl as the person at the machine runs it, with its exit status and what it printed.
+teejet::testing::Finished valvectl(int domain, std::vector<std::string> arguments) {
+  arguments.insert(arguments.begin(), {VALVECTL_PATH, "--domain", std::to_string(domain)});
+  teejet::testing::Subprocess run(arguments);
+  return run.wait(60s);
+}
+
+TEST(LayoutEndToEnd, AReplacementIsAssignedOverDdsSavedAndKeptAcrossARestart) {
+  teejet::testing::ScratchDir dir;
+  const std::string file = dir / "boom.yaml";
+  ASSERT_TRUE(layout::save_layout_file(file, six_places()));
+  auto config = sim_config("gw-layout", 6);
+  config.layout_file = file;
+  ASSERT_TRUE(read_layout_file(config));
+  auto gateway = make_gateway(config);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
+  DdsPeer ecu(config.domain, "boom-ecu");
+  auto* locations = ecu.reader<ValveLocation>();
+  ASSERT_NE(locations, nullptr);
+  std::map<std::string, ValveLocation> places;
+  const auto place = [&](const std::string& name) {
+    latest_by(locations, places,
+              [](const ValveLocation& sample) { return sample.location().to_string(); });
+    return places[name];
+  };
+  ASSERT_TRUE(eventually([&] { return place("left-master").state() == LOCATION_MISSING; }, 15s));
+
+  // The master valve TJV000099 was replaced by TJV000006, which sits nowhere yet.
+  const auto assigned = valvectl(config.domain, {"assign", "left-master", "TJV000006"});
+  EXPECT_EQ(assigned.exit_code, 0) << describe(assigned);
+  EXPECT_EQ(assigned.out,
+            "left-master on gw-layout: APPLIED: TJV000006 sits there (TJV000099 left "
+            "it)\n");
+  ASSERT_TRUE(eventually([&] { return place("left-master").state() == LOCATION_OK; }, 15s));
+  EXPECT_EQ(place("left-master").serial(), 6u);
+  const auto saved = layout::load_layout_file(file);
+  ASSERT_TRUE(saved);
+  EXPECT_EQ(saved->find("left-master")->serial, 6u);
+  EXPECT_EQ(saved->find("left-master")->mechanics, (layout::Mechanics{0, 360}));
+
+  // Refusals say why, and change nothing.
+  const auto taken = valvectl(config.domain, {"assign", "section-01", "TJV000003"});
+  EXPECT_EQ(taken.exit_code, 3) << describe(taken);
+  EXPECT_EQ(taken.out,
+            "section-01 on gw-layout: REJECTED: TJV000003 sits at section-03; unassign "
+            "it there first, or move it\n");
+  const auto absent = valvectl(config.domain, {"assign", "section-02", "TJV000042"});
+  EXPECT_EQ(absent.exit_code, 3) << describe(absent);
+  EXPECT_NE(absent.out.find("REJECTED: TJV000042 is not online on sim:6 (gateway gw-layout)"),
+            std::string::npos)
+      << absent.out;
+  const auto unknown = valvectl(config.domain, {"unassign", "section-09"});
+  EXPECT_EQ(unknown.exit_code, 2) << describe(unknown);
+  EXPECT_NE(unknown.err.find("no gateway on domain " + std::to_string(config.domain) +
+                             " has a location 'section-09' in its layout"),
+            std::string::npos)
+      << unknown.err;
+  EXPECT_EQ(layout::load_layout_file(file)->find("section-01")->serial, 1u);
+
+  // A restart reads the file it wrote.
+  gateway->stop();
+  gateway.reset();
+  auto again = sim_config("gw-layout", 6);
+  again.domain = config.domain;
+  again.layout_file = file;
+  ASSERT_TRUE(read_layout_file(again));
+  EXPECT_EQ(again.bridge.layout.find("left-master")->serial, 6u);
+  gateway = make_gateway(again);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
+  const auto listed = valvectl(config.domain, {"--json", "layout"});
+  ASSERT_EQ(listed.exit_code, 0) << describe(listed);
+  const auto json = nlohmann::json::parse(listed.out);
+  EXPECT_EQ(json["locations"][0]["location"], "left-master");
+  EXPECT_EQ(json["locations"][0]["serial"], "TJV000006");
+  EXPECT_EQ(json["locations"][0]["state"], "ok");
+  EXPECT_EQ(json["unassigned"].dump(), "[]");
   gateway->stop();
 }
 

@@ -11,6 +11,7 @@
 #include "teejet/codec/table.hpp"
 #include "teejet/command_line.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/layout/layout.hpp"
 
 namespace teejet::valvectl {
 
@@ -32,6 +33,8 @@ See docs/valvectl.md.)";
 // Unsigned where the wire is: CLI11 refuses a negative number or one that does not fit.
 struct RawArguments {
   std::string serial;
+  std::string location;
+  bool move = false;
   std::string what;
   double degrees = 0.0;
   unsigned speed = 100;
@@ -57,6 +60,8 @@ struct Parser {
   CLI::App* list = nullptr;
   CLI::App* watch = nullptr;
   CLI::App* layout = nullptr;
+  CLI::App* assign = nullptr;
+  CLI::App* unassign = nullptr;
   CLI::App* move = nullptr;
   CLI::App* stop = nullptr;
   CLI::App* manual = nullptr;
@@ -196,6 +201,20 @@ void define(Parser& parser) {
 
   parser.layout = app.add_subcommand(
       "layout", "where each valve sits: every place of the gateways' layouts, in machine order");
+
+  const auto add_location = [&](CLI::App* subcommand) {
+    subcommand->add_option("LOCATION", raw.location, "a place of a gateway's layout (section-03)")
+        ->required();
+  };
+  parser.assign = app.add_subcommand(
+      "assign", "put a valve at its place in the layout (a valve fitted, or one replaced)");
+  add_location(parser.assign);
+  add_serial(parser.assign, raw);
+  parser.assign->add_flag("--move", raw.move,
+                          "the valve sits at another place of the layout: take it from there");
+  parser.unassign =
+      app.add_subcommand("unassign", "leave a place of the layout empty (its valve taken off)");
+  add_location(parser.unassign);
 
   parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
   add_serial_or_all(parser.move, raw);
@@ -346,6 +365,16 @@ void build_invocation(Parser& parser) {
     invocation.subcommand = Subcommand::kList;
   } else if (used == parser.layout) {
     invocation.subcommand = Subcommand::kLayout;
+  } else if (used == parser.assign || used == parser.unassign) {
+    invocation.subcommand = Subcommand::kLayoutChange;
+    LayoutChangeRequest& change = invocation.layout_change;
+    if (const auto valid = layout::check_name(parser.raw.location); !valid) {
+      usage_error("invalid LOCATION: " + valid.error().complaint);
+    }
+    change.location = parser.raw.location;
+    change.kind = used == parser.assign ? LAYOUT_ASSIGN : LAYOUT_UNASSIGN;
+    if (used == parser.assign) change.serial = checked_serial(parser.raw.serial);
+    change.move = parser.raw.move;
   } else if (used == parser.watch) {
     invocation.subcommand = Subcommand::kWatch;
     invocation.watch.interval = std::chrono::milliseconds(parser.raw.interval_ms);

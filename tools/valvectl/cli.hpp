@@ -46,7 +46,15 @@ struct CommandRequest {
   std::chrono::milliseconds wait_timeout{60000};  // backstop when no final status arrives
 };
 
-enum class Subcommand { kList, kWatch, kLayout, kCommand };
+// assign and unassign: a change of the layout of the gateway that holds the location.
+struct LayoutChangeRequest {
+  LayoutChangeKind kind = LAYOUT_ASSIGN;
+  std::string location;
+  std::uint32_t serial = 0;  // assign
+  bool move = false;         // assign: take the valve from the place it sits at now
+};
+
+enum class Subcommand { kList, kWatch, kLayout, kLayoutChange, kCommand };
 
 struct Invocation {
   GlobalOptions global;
@@ -54,6 +62,7 @@ struct Invocation {
   ListOptions list;
   WatchOptions watch;
   CommandRequest command;
+  LayoutChangeRequest layout_change;
 };
 
 // Either an invocation to run, or an exit status with what to print first (help and version on

@@ -218,6 +218,31 @@ std::string status_text(const CommandStatus& status) {
   return text;
 }
 
+std::string layout_change_text(const LayoutChangeStatus& status) {
+  std::string text = status.location().to_string() + " on " + status.gateway().to_string() + ": ";
+  text += upper(std::string(dds::to_string(status.state())));
+  const std::string reason = status.reason().to_string();
+  if (status.state() != LAYOUT_CHANGE_APPLIED) return text + ": " + reason;
+  text += status.serial() != 0 ? ": " + codec::format_serial(status.serial()) + " sits there"
+                               : std::string(": empty");
+  return reason.empty() ? text : text + " (" + reason + ")";
+}
+
+nlohmann::json layout_change_json(const LayoutChangeStatus& status) {
+  return {
+      {"event", "layout_change"},
+      {"location", status.location().to_string()},
+      {"gateway", status.gateway().to_string()},
+      {"kind", dds::to_string(status.kind())},
+      {"state", dds::to_string(status.state())},
+      {"serial", status.serial() != 0 ? nlohmann::json(codec::format_serial(status.serial()))
+                                      : nlohmann::json(nullptr)},
+      {"reason", status.reason().to_string()},
+      {"change_id", status.change_id()},
+      {"origin", status.origin().to_string()},
+  };
+}
+
 std::string position_text(std::uint32_t serial, double degrees) {
   return codec::format_serial(serial) + " position " + one_decimal(degrees);
 }

@@ -32,6 +32,13 @@ std::string render_gateways(const std::vector<GatewaySummary>& gateways);
 // "TJV000002 target_degrees #17: ACCEPTED", "...: REJECTED: valve TJV000002 is offline".
 std::string status_text(const CommandStatus& status);
 
+// "section-03 on rig-1: APPLIED: TJV000007 sits there (TJV000003 left it)", "section-03 on
+// rig-1: APPLIED: empty", "...: REJECTED: <reason>"; JSON {"event":"layout_change",
+// "location":..,"gateway":..,"kind":"assign","state":"applied","serial":"TJV000007"|null,
+// "reason":..,"change_id":..,"origin":..}.
+std::string layout_change_text(const LayoutChangeStatus& status);
+nlohmann::json layout_change_json(const LayoutChangeStatus& status);
+
 // "TJV000002 position 45.3"; {"event":"position","serial":"TJV000002","degrees":45.3}
 std::string position_text(std::uint32_t serial, double degrees);
 nlohmann::json position_json(std::uint32_t serial, double degrees);

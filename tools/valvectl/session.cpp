@@ -81,6 +81,8 @@ class Session {
         return watch();
       case Subcommand::kLayout:
         return layout();
+      case Subcommand::kLayoutChange:
+        return layout_change();
       case Subcommand::kCommand:
         return command();
     }
@@ -162,6 +164,79 @@ class Session {
     }
     terminal_.out << std::flush;
     return kExitOk;
+  }
+
+  // assign and unassign: to the one gateway whose layout holds the place.
+  int layout_change() {
+    const LayoutChangeRequest& request = invocation_.layout_change;
+    const Deadline until = after_timeout();
+    const auto named = [&](const ValveTable& table) {
+      return table.locations_named(request.location);
+    };
+    view_.wait_until(
+        [&](const ValveTable& table) {
+          return table.directory_complete() && !named(table).empty();
+        },
+        until, terminal_.interrupted);
+    if (terminal_.interrupted) return kExitInterrupted;
+    const ValveTable table = view_.snapshot();
+    const auto places = named(table);
+    if (table.empty()) {
+      complain("no gateway found on " + domain_text());
+      return kExitNotFound;
+    }
+    if (places.empty()) {
+      complain("no gateway on " + domain_text() + " has a location '" + request.location +
+               "' in its layout" +
+               (table.directory_complete() ? "" : " (discovery was still going on)"));
+      return kExitNotFound;
+    }
+    if (places.size() > 1) {
+      std::string gateways;
+      for (const auto& place : places) gateways += (gateways.empty() ? "" : ", ") + place.gateway;
+      complain("location '" + request.location + "' is in the layouts of " +
+               std::to_string(places.size()) + " gateways (" + gateways +
+               "): a name belongs to one; rename it in all but one layout. Nothing was sent");
+      return kExitRejected;
+    }
+    const LocationRow& place = places.front();
+    auto made = LayoutClient::create(*participant_, default_origin("valvectl"));
+    if (!made) {
+      complain(made.error().reason);
+      return kExitFailure;
+    }
+    LayoutClient& client = **made;
+    const auto connected = client.connect({place.participant}, 0, until, terminal_.interrupted);
+    if (!connected) {
+      complain(connected.error().reason);
+      return kExitFailure;
+    }
+    if (!*connected) {
+      if (terminal_.interrupted) return kExitInterrupted;
+      complain("gateway " + place.gateway + " did not subscribe to layout changes within " +
+               seconds_text(invocation_.global.timeout) + " on " + domain_text() +
+               "; nothing was sent");
+      return kExitNotFound;
+    }
+    LayoutChange change;
+    change.location(request.location);
+    change.gateway(place.gateway);
+    change.kind(request.kind);
+    change.serial(request.serial);
+    change.move(request.move);
+    const auto id = client.send(change);
+    if (!id) {
+      complain("could not write the layout change");
+      return kExitFailure;
+    }
+    const auto status = client.next_status(*id, after_timeout());
+    if (!status) {
+      complain("no answer from gateway " + place.gateway + " to the layout change of '" +
+               request.location + "' within " + seconds_text(invocation_.global.timeout));
+      return kExitTimedOut;
+    }
+    emit(layout_change_text(*status), layout_change_json(*status));
+    return status->state() == LAYOUT_CHANGE_APPLIED ? kExitOk : kExitRejected;
   }
 
   void print_table(const ValveTable& table, bool with_gateways) {

@@ -58,6 +58,24 @@ void count_match(std::multiset<std::string>& participants, int change,
   }
 }
 
+template <class Sample>
+std::uint32_t id_of(const Sample& sample) {
+  if constexpr (requires { sample.command_id(); }) {
+    return sample.command_id();
+  } else {
+    return sample.change_id();
+  }
+}
+
+template <class Request>
+void set_id(Request& request, std::uint32_t id) {
+  if constexpr (requires { request.command_id(id); }) {
+    request.command_id(id);
+  } else {
+    request.change_id(id);
+  }
+}
+
 }  // namespace
 
 std::string default_origin(std::string_view program) {
@@ -74,10 +92,11 @@ std::string default_origin(std::string_view program) {
   return origin + pid;
 }
 
-class CommandClient::CommandWriterMatches final
+template <class Request>
+class RequestClient<Request>::CommandWriterMatches final
     : public eprosima::fastdds::dds::DataWriterListener {
  public:
-  explicit CommandWriterMatches(CommandClient& client) : client_(client) {}
+  explicit CommandWriterMatches(RequestClient& client) : client_(client) {}
   void on_publication_matched(
       eprosima::fastdds::dds::DataWriter* /*writer*/,
       const eprosima::fastdds::dds::PublicationMatchedStatus& status) override {
@@ -87,16 +106,18 @@ class CommandClient::CommandWriterMatches final
   }
 
  private:
-  CommandClient& client_;
+  RequestClient& client_;
 };
 
-CommandClient::CommandClient(dds::Participant& participant, std::string origin)
+template <class Request>
+RequestClient<Request>::RequestClient(dds::Participant& participant, std::string origin)
     : participant_(participant), origin_(std::move(origin)), next_id_(random_first_id()) {}
 
-Result<std::unique_ptr<CommandClient>> CommandClient::create(dds::Participant& participant,
-                                                             std::string origin) {
-  std::unique_ptr<CommandClient> client(new CommandClient(participant, std::move(origin)));
-  auto topic = participant.topic<CommandStatusPubSubType>(dds::topics::kCommandStatus);
+template <class Request>
+Result<std::unique_ptr<RequestClient<Request>>> RequestClient<Request>::create(
+    dds::Participant& participant, std::string origin) {
+  std::unique_ptr<RequestClient> client(new RequestClient(participant, std::move(origin)));
+  auto topic = dds::topics::topic_of<Status>(participant);
   if (!topic) return topic.error();
   auto reader =
       participant.reader(*topic, dds::topics::status_reader_qos(), client.get(),
@@ -107,14 +128,16 @@ Result<std::unique_ptr<CommandClient>> CommandClient::create(dds::Participant& p
   return client;
 }
 
-CommandClient::~CommandClient() {
+template <class Request>
+RequestClient<Request>::~RequestClient() {
   // The participant outlives this client: delete the reader while its listener still exists.
   participant_.delete_reader(status_reader_);
   participant_.delete_writer(command_writer_);
 }
 
-std::set<std::string> CommandClient::missing(const std::set<std::string>& owners,
-                                             bool command_writer_too) const {
+template <class Request>
+std::set<std::string> RequestClient<Request>::missing(const std::set<std::string>& owners,
+                                                      bool command_writer_too) const {
   std::lock_guard lock(match_mutex_);
   std::set<std::string> missing;
   for (const auto& owner : owners) {
@@ -126,28 +149,30 @@ std::set<std::string> CommandClient::missing(const std::set<std::string>& owners
   return missing;
 }
 
-std::set<std::string> CommandClient::unmatched(const std::set<std::string>& owners) const {
+template <class Request>
+std::set<std::string> RequestClient<Request>::unmatched(const std::set<std::string>& owners) const {
   return missing(owners, /*command_writer_too=*/true);
 }
 
-Result<bool> CommandClient::connect(const std::set<std::string>& owners,
-                                    std::size_t command_readers, Deadline until,
-                                    const std::atomic<bool>& interrupted) {
+template <class Request>
+Result<bool> RequestClient<Request>::connect(const std::set<std::string>& owners,
+                                             std::size_t command_readers, Deadline until,
+                                             const std::atomic<bool>& interrupted) {
   const bool reader_matched = wait_for(
       [&] { return missing(owners, /*command_writer_too=*/false).empty(); }, until, interrupted);
   if (!reader_matched) return false;
   if (command_writer_ == nullptr) {
-    auto topic = participant_.topic<ValveCommandPubSubType>(dds::topics::kCommand);
+    auto topic = dds::topics::topic_of<Request>(participant_);
     if (!topic) return topic.error();
     writer_matches_ = std::make_unique<CommandWriterMatches>(*this);
     auto writer =
         participant_.writer(*topic, dds::topics::command_writer_qos(), writer_matches_.get());
     // The QoS is fixed, so a refusal here is DDS-Security: an observer's permissions say no.
     if (!writer) {
-      return Error{ErrorCode::kDds, std::string("this participant may not write ") +
-                                        dds::topics::kCommand +
-                                        " (its DDS-Security permissions do not grant it); no "
-                                        "command was sent"};
+      return Error{ErrorCode::kDds, "this participant may not write " +
+                                        dds::topics::topic_name<Request>() +
+                                        " (its DDS-Security permissions do not grant it); no " +
+                                        RequestTopics<Request>::kWhat + " was sent"};
     }
     command_writer_ = *writer;
   }
@@ -170,10 +195,11 @@ Result<bool> CommandClient::connect(const std::set<std::string>& owners,
   return true;
 }
 
-std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
+template <class Request>
+std::optional<std::uint32_t> RequestClient<Request>::send(Request command) {
   const std::uint32_t id = next_id_++;
   if (next_id_ == 0) next_id_ = 1;
-  command.command_id(id);
+  set_id(command, id);
   command.origin(origin_);
   if (command_writer_ == nullptr) return std::nullopt;
   const auto written = command_stamps_.write_now([&](const auto& stamp) {
@@ -183,39 +209,47 @@ std::optional<std::uint32_t> CommandClient::send(ValveCommand command) {
   return id;
 }
 
-bool CommandClient::delivered(Deadline until) {
+template <class Request>
+bool RequestClient<Request>::delivered(Deadline until) {
   if (command_writer_ == nullptr) return true;
   return command_writer_->wait_for_acknowledgments(dds::to_dds_duration(
              until - std::chrono::steady_clock::now())) == ReturnCode::RETCODE_OK;
 }
 
-std::optional<CommandStatus> CommandClient::next_status(std::uint32_t id, Deadline until) {
+template <class Request>
+auto RequestClient<Request>::next_status(std::uint32_t id, Deadline until)
+    -> std::optional<Status> {
   std::unique_lock lock(mutex_);
   auto& queue = statuses_[id];
   if (!arrived_.wait_until(lock, until, [&] { return !queue.empty(); })) return std::nullopt;
-  CommandStatus status = std::move(queue.front());
+  Status status = std::move(queue.front());
   queue.pop_front();
   return status;
 }
 
-void CommandClient::on_subscription_matched(
+template <class Request>
+void RequestClient<Request>::on_subscription_matched(
     DataReader* /*reader*/, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
   std::lock_guard lock(match_mutex_);
   count_match(status_writers_, status.current_count_change, status.last_publication_handle);
 }
 
-void CommandClient::on_data_available(DataReader* reader) {
+template <class Request>
+void RequestClient<Request>::on_data_available(DataReader* reader) {
   // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener.
-  std::vector<CommandStatus> ours;
-  CommandStatus status;
+  std::vector<Status> ours;
+  Status status;
   SampleInfo info;
   while (reader->take_next_sample(&status, &info) == ReturnCode::RETCODE_OK) {
     if (info.valid_data && status.origin().to_string() == origin_) ours.push_back(status);
   }
   if (ours.empty()) return;
   std::lock_guard lock(mutex_);
-  for (const CommandStatus& taken : ours) statuses_[taken.command_id()].push_back(taken);
+  for (const Status& taken : ours) statuses_[id_of(taken)].push_back(taken);
   arrived_.notify_all();
 }
+
+template class RequestClient<ValveCommand>;
+template class RequestClient<LayoutChange>;
 
 }  // namespace teejet::client

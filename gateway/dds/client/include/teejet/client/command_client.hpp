@@ -1,7 +1,8 @@
 #pragma once
 
-// Writes ValveCommands and follows their CommandStatus. Every command gets a fresh command_id
-// and the origin "valvectl@HOST:PID"; statuses of other senders are ignored, so several valvectl
+// Writes requests to the gateways and follows their statuses: ValveCommands and their
+// CommandStatus, LayoutChanges and their LayoutChangeStatus. Every request gets a fresh id and
+// the origin "valvectl@HOST:PID"; statuses of other senders are ignored, so several valvectl
 // runs and ECUs can command the same domain at once.
 
 #include <atomic>
@@ -27,14 +28,31 @@ namespace teejet::client {
 // "PROGRAM@HOST:PID", at most 64 characters (the IDL's bound).
 std::string default_origin(std::string_view program);
 
-class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
+// What tells the two kinds of request apart: their topics, status type and id field.
+template <class Request>
+struct RequestTopics;
+template <>
+struct RequestTopics<ValveCommand> {
+  using Status = CommandStatus;
+  static constexpr const char* kWhat = "command";
+};
+template <>
+struct RequestTopics<LayoutChange> {
+  using Status = LayoutChangeStatus;
+  static constexpr const char* kWhat = "layout change";
+};
+
+template <class Request>
+class RequestClient final : public eprosima::fastdds::dds::DataReaderListener {
  public:
+  using Status = typename RequestTopics<Request>::Status;
+
   // Subscribes to command status at once; the command writer is created by connect().
-  static Result<std::unique_ptr<CommandClient>> create(dds::Participant& participant,
+  static Result<std::unique_ptr<RequestClient>> create(dds::Participant& participant,
                                                        std::string origin);
-  ~CommandClient() override;
-  CommandClient(const CommandClient&) = delete;
-  CommandClient& operator=(const CommandClient&) = delete;
+  ~RequestClient() override;
+  RequestClient(const RequestClient&) = delete;
+  RequestClient& operator=(const RequestClient&) = delete;
 
   // Waits until every gateway in `owners` (their participants, ValveRow::participant: the
   // gateways that own the valves to command) matches the status reader, then creates the
@@ -54,11 +72,11 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
 
   // Writes `command` with a fresh command_id and this client's origin; returns the id, or
   // nullopt when the write failed. Requires connect().
-  std::optional<std::uint32_t> send(ValveCommand command);
+  std::optional<std::uint32_t> send(Request request);
 
   // The next status of command `id` not returned before, in the order the gateway wrote them;
   // nullopt when none arrives by `until`.
-  std::optional<CommandStatus> next_status(std::uint32_t id, Deadline until);
+  std::optional<Status> next_status(std::uint32_t id, Deadline until);
 
   // Waits until every command reader this writer matched has acknowledged every command sent,
   // or `until`; false when one has not. A reader whose own side of the match came after the
@@ -73,7 +91,7 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
       const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override;
 
  private:
-  CommandClient(dds::Participant& participant, std::string origin);
+  RequestClient(dds::Participant& participant, std::string origin);
   class CommandWriterMatches;
   // The owners not yet matched by the status reader and, `command_writer_too`, the writer.
   std::set<std::string> missing(const std::set<std::string>& owners, bool command_writer_too) const;
@@ -95,7 +113,12 @@ class CommandClient final : public eprosima::fastdds::dds::DataReaderListener {
 
   std::mutex mutex_;
   std::condition_variable arrived_;
-  std::map<std::uint32_t, std::deque<CommandStatus>> statuses_;  // by command_id, not yet read
+  std::map<std::uint32_t, std::deque<Status>> statuses_;  // by request id, not yet read
 };
+
+using CommandClient = RequestClient<ValveCommand>;
+using LayoutClient = RequestClient<LayoutChange>;
+extern template class RequestClient<ValveCommand>;
+extern template class RequestClient<LayoutChange>;
 
 }  // namespace teejet::client
