@@ -12,7 +12,8 @@ and valvectl as each kind of participant a user meets (docs/security.md).
 Cases (what a user notices):
   commander  lists the 4 valves of --can sim:4, moves one to 90 degrees and sees it COMPLETED
   observer   lists them too, but its move fails at once naming the command topic, and the valve
-             stays where it was
+             stays where it was; so does its assign (valvectl assign), naming the layout change
+             topic, while the commander's assign is applied and saved in the gateway's layout file
   refused    no security at all, a certificate of another CA with the same names, a revoked
              certificate (still holding the permissions signed before the revocation), the key
              and certificate that rotation replaced: each finds no gateway; an expired
@@ -325,8 +326,15 @@ class Suite:
         # stretches most (24 to 45 s at load 7 to 10 on 2 cores, against 6 to 9 s of cases).
         print(f"     (site made by tools/pki in {time.monotonic() - making:.2f} s)", flush=True)
         started = time.monotonic()
+        # Four places hold the four valves; a fifth is empty, for the assign cases.
+        self.layout_file = os.path.join(self.work, "boom.yaml")
+        with open(self.layout_file, "w") as layout:
+            layout.write("locations:\n" + "".join(
+                f"  - {{name: section-0{i + 1}, order: {i + 1}, serial: {serial}}}\n"
+                for i, serial in enumerate(SERIALS)) + "  - {name: section-05, order: 5}\n")
         gateway = self.hosts.spawn(
-            "vehicle", [self.args.gateway, "--can", "sim:4", "--profile", self.profiles["gw"]],
+            "vehicle", [self.args.gateway, "--can", "sim:4", "--profile", self.profiles["gw"],
+                        "--layout", self.layout_file],
             env=self.env_for(self.profiles["gw"], "vehicle"), log=self.gateway_log)
         try:
             self.cases()
@@ -384,6 +392,23 @@ class Suite:
                    refused_move.returncode == 1
                    and "may not write teejet/valve/command" in refused_move.stderr,
                    f"exit {refused_move.returncode}, stderr: {refused_move.stderr.strip()}")
+
+        refused_assign = self.valvectl(self.profiles["watcher"], "assign", "section-05",
+                                       SERIALS[1], "--move")
+        self.check("observer's assign is refused at once, naming the layout change topic",
+                   refused_assign.returncode == 1
+                   and "may not write teejet/layout/change" in refused_assign.stderr,
+                   f"exit {refused_assign.returncode}, stderr: {refused_assign.stderr.strip()}")
+        assign = self.valvectl(self.profiles["bench"], "assign", "section-05", SERIALS[3], "--move")
+        with open(self.layout_file) as layout:
+            saved = layout.read()
+        self.check("commander assigns TJV000004 to section-05, and the gateway saves it",
+                   assign.returncode == 0
+                   and "section-05 on " in assign.stdout and "APPLIED: TJV000004 sits there"
+                   in assign.stdout and "name: \"section-05\", order: 5, role: section, "
+                   "serial: TJV000004" in saved,
+                   f"exit {assign.returncode}, stdout: {assign.stdout.strip()}, stderr: "
+                   f"{assign.stderr.strip()[-300:]}, file:\n{saved}")
 
         after, positions = self.listing_when(
             self.profiles["bench"], lambda listed: listed.get(SERIALS[0]) == 90.0)
