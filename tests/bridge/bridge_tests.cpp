@@ -954,6 +954,60 @@ TEST_F(BridgeLayoutChange, AValvePutAtAPlaceMovesWithinThatPlacesMechanics) {
   command_at(bridge, kStart + 1s, from(kEcu, 70, move_to(7, 120.0f)));
   deliver(bridge, from_valve(0xDB, codec::Position{80.0}, kStart + 2s));
   EXPECT_EQ(sink.states_of(70), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(sink.last_reason(), "stopped at 80.0, the Opened Degrees of section-01 (asked 120.0)");
+}
+
+// ---- Moves the valve's own mechanics cut short (issue 26, item 5) ---------------------------
+
+TEST_F(BridgeTest, AMoveAValveStopsShortOfEndsWhereItStoppedWhenItsMechanicsAreUnknown) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD9, 2, kStart);
+  deliver(bridge, from_valve(0xD9, codec::Position{0.0}, kStart + 100ms));
+  command_at(bridge, kStart + 200ms, from(kEcu, 71, move_to(2, 120.0f)));
+  // The valve, configured 0..90, takes 120 as its Opened Degrees (the sheet) and stops there.
+  deliver(bridge, from_valve(0xD9, codec::Position{60.0}, kStart + 1s));
+  deliver(bridge, from_valve(0xD9, codec::Position{90.0}, kStart + 2s));
+  deliver(bridge,
+          from_valve(0xD9, codec::SpeedDirection{0, codec::Direction::kOpen}, kStart + 2100ms));
+  deliver(bridge, from_valve(0xD9, codec::Position{90.0}, kStart + 3s));
+  EXPECT_EQ(sink.states_of(71), std::vector{COMMAND_ACCEPTED});  // steady 1 s: not yet
+  deliver(bridge, from_valve(0xD9, codec::Position{90.0}, kStart + 3600ms));
+  EXPECT_EQ(sink.states_of(71), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
+  EXPECT_EQ(sink.last_reason(),
+            "stopped at 90.0, short of the 120.0 asked, and holds there: presumably its own "
+            "Opened or Closed Degrees, which the layout does not give for this valve "
+            "(docs/layout.md)");
+}
+
+TEST_F(BridgeTest, AValveThatHoldsStillButStillReportsSpeedIsNotCalledStopped) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce(bridge, 0xD9, 2, kStart);
+  deliver(bridge, from_valve(0xD9, codec::Position{0.0}, kStart + 100ms));
+  command_at(bridge, kStart + 200ms, from(kEcu, 72, move_to(2, 120.0f, 10)));
+  deliver(bridge,
+          from_valve(0xD9, codec::SpeedDirection{10, codec::Direction::kOpen}, kStart + 1s));
+  for (auto at = kStart + 1100ms; at < kStart + 3s; at += 100ms) {
+    deliver(bridge, from_valve(0xD9, codec::Position{0.0}, at));  // starting slowly
+  }
+  EXPECT_EQ(sink.states_of(72), std::vector{COMMAND_ACCEPTED});
+}
+
+TEST_F(BridgeTest, AValveBlockedShortOfATargetWithinItsMechanicsTimesOutAtOnce) {
+  auto c = config();
+  c.layout = *layout::Layout::make({}, layout::Mechanics{0, 90});
+  Bridge bridge(c, gateway_bus, sink, clock);
+  announce(bridge, 0xD9, 2, kStart);
+  deliver(bridge, from_valve(0xD9, codec::Position{0.0}, kStart + 100ms));
+  command_at(bridge, kStart + 200ms, from(kEcu, 73, move_to(2, 60.0f)));
+  deliver(bridge, from_valve(0xD9, codec::Position{30.0}, kStart + 1s));
+  deliver(bridge,
+          from_valve(0xD9, codec::SpeedDirection{0, codec::Direction::kOpen}, kStart + 1100ms));
+  deliver(bridge, from_valve(0xD9, codec::Position{30.1}, kStart + 2s));
+  deliver(bridge, from_valve(0xD9, codec::Position{30.1}, kStart + 2600ms));
+  EXPECT_EQ(sink.states_of(73), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
+  EXPECT_EQ(sink.last_reason(),
+            "stopped at 30.1, short of the 60.0 asked, and holds there (speed 0): blocked, or its "
+            "mechanics are not these");
 }
 
 }  // namespace

@@ -219,7 +219,7 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
     }
   }
   Outcome outcome;
-  tracker_->heard(serial, message, outcome);
+  tracker_->heard(serial, message, clock_->steady(), outcome);
   settle(outcome);
   auto sample = dds::to_sample(serial, message, received);
   if (!sample) return;

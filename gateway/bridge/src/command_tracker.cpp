@@ -48,6 +48,11 @@ std::string format_degrees(double degrees) {
   return text;
 }
 
+// How still a valve must hold, and for how long, before a move that stopped short of its target
+// ends: longer than the gap between two speed reports of the default poll (1 s).
+constexpr double kSteadyDegrees = 0.2;
+constexpr Duration kStoppedShortAfter = std::chrono::milliseconds(1500);
+
 // `time + by`, held at the end of time instead of overflowing.
 SteadyTime later(SteadyTime time, Duration by) {
   return by >= SteadyTime::max() - time ? SteadyTime::max() : time + by;
@@ -98,6 +103,19 @@ void CommandTracker::sent(std::uint32_t serial, const codec::ToValveMessage& mes
   // Target Degrees or Degrees from Position: complete when the position arrives there.
   const auto limits = layout_.mechanics_of_serial(serial);
   tracked.target_degrees = target_of(message, valve, limits);
+  tracked.asked_degrees = target_of(message, valve, std::nullopt);
+  tracked.mechanics_known = limits.has_value();
+  tracked.sent_at = now;
+  if (tracked.target_degrees && tracked.asked_degrees &&
+      dial_distance(*tracked.target_degrees, *tracked.asked_degrees) > 0.05) {
+    const auto* place = layout_.find_serial(serial);
+    const bool opened = *tracked.target_degrees == limits->opened_degrees;
+    tracked.completion_note =
+        "stopped at " + format_degrees(*tracked.target_degrees) + ", the " +
+        (opened ? "Opened" : "Closed") + " Degrees of " +
+        (place != nullptr ? place->name : std::string("this gateway's valves")) + " (asked " +
+        format_degrees(*tracked.asked_degrees) + ")";
+  }
   // The configuration keeps assumed_dps above 0; max() keeps a bad one from dividing by zero.
   const double full_speed_dps = std::max(1u, valve.dps > 0 ? valve.dps : config_.assumed_dps);
   const double dps = full_speed_dps * speed / 100.0;
@@ -106,24 +124,34 @@ void CommandTracker::sent(std::uint32_t serial, const codec::ToValveMessage& mes
   if (tracked.target_degrees && valve.position &&
       dial_distance(*valve.position, *tracked.target_degrees) <=
           config_.completion_tolerance_degrees) {
-    out.ended.push_back({command, COMMAND_COMPLETED, ""});
+    out.ended.push_back({command, COMMAND_COMPLETED, tracked.completion_note});
     return;
   }
   valve.motion = std::move(tracked);
 }
 
 void CommandTracker::heard(std::uint32_t serial, const codec::FromValveMessage& message,
-                           Outcome& out) {
+                           SteadyTime now, Outcome& out) {
   Valve& valve = valves_[serial];
   if (const auto* position = std::get_if<codec::Position>(&message)) {
     valve.position = position->degrees;
-    if (valve.motion && valve.motion->target_degrees &&
-        dial_distance(position->degrees, *valve.motion->target_degrees) <=
-            config_.completion_tolerance_degrees) {
-      end_motion(valve, COMMAND_COMPLETED, "", out);
+    if (valve.motion && valve.motion->target_degrees) {
+      Tracked& move = *valve.motion;
+      if (dial_distance(position->degrees, *move.target_degrees) <=
+          config_.completion_tolerance_degrees) {
+        end_motion(valve, COMMAND_COMPLETED, move.completion_note, out);
+      } else if (const auto reason = stopped_short(move, valve, position->degrees, now)) {
+        // Known mechanics put the target within reach: holding short of it is a fault, which
+        // a move's deadline would only have reported later.
+        end_motion(valve, move.mechanics_known ? COMMAND_TIMED_OUT : COMMAND_COMPLETED, *reason,
+                   out);
+      }
     }
   } else if (const auto* dps = std::get_if<codec::DegreesPerSecond>(&message)) {
     valve.dps = dps->dps;
+  } else if (const auto* speed = std::get_if<codec::SpeedDirection>(&message)) {
+    valve.speed = speed->speed_percent;
+    valve.speed_heard_at = now;
   }
   const std::uint8_t id = codec::message_id(message);
   std::erase_if(valve.requests, [&](const Tracked& request) {
@@ -131,6 +159,24 @@ void CommandTracker::heard(std::uint32_t serial, const codec::FromValveMessage& 
     end_request(serial, request, COMMAND_COMPLETED, "", out);
     return true;
   });
+}
+
+std::optional<std::string> CommandTracker::stopped_short(Tracked& move, const Valve& valve,
+                                                         double degrees, SteadyTime now) {
+  if (!move.steady_degrees || dial_distance(degrees, *move.steady_degrees) > kSteadyDegrees) {
+    move.steady_degrees = degrees;
+    move.steady_since = now;
+    return std::nullopt;
+  }
+  const bool still = now - move.steady_since >= kStoppedShortAfter;
+  const bool speed_zero = valve.speed == 0u && valve.speed_heard_at > move.sent_at;
+  if (!still || !speed_zero) return std::nullopt;
+  const std::string where = "stopped at " + format_degrees(degrees) + ", short of the " +
+                            format_degrees(*move.target_degrees) + " asked, and holds there";
+  if (move.mechanics_known) return where + " (speed 0): blocked, or its mechanics are not these";
+  return where +
+         ": presumably its own Opened or Closed Degrees, which the layout does not give "
+         "for this valve (docs/layout.md)";
 }
 
 void CommandTracker::stopped(std::uint32_t serial, const std::string& reason, Outcome& out) {

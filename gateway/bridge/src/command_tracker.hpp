@@ -39,8 +39,10 @@ class CommandTracker {
   void sent(std::uint32_t serial, const codec::ToValveMessage& message, const ValveCommand& command,
             const std::string& commander, SteadyTime now, Outcome& out);
 
-  // Telemetry from the valve: positions complete moves, replies complete requests.
-  void heard(std::uint32_t serial, const codec::FromValveMessage& message, Outcome& out);
+  // Telemetry from the valve: positions complete moves, replies complete requests. A move whose
+  // valve stopped short of the target (speed 0 reported, the position steady) ends at once.
+  void heard(std::uint32_t serial, const codec::FromValveMessage& message, SteadyTime now,
+             Outcome& out);
 
   // The gateway stopped the valve on its own account (shutdown, fail-safe): its command is
   // over and nobody drives it any more.
@@ -73,15 +75,29 @@ class CommandTracker {
     std::optional<std::uint8_t> awaited_reply;  // requests: the message id that answers
     bool done_at_deadline = false;              // Milliseconds to Run: complete when its time is up
     std::optional<codec::ToValveMessage> restores;
+    // Moves: when sent, what was asked before the mechanics clamped it, and what the
+    // completion says about that; where and since when the position has been steady.
+    SteadyTime sent_at{};
+    std::optional<double> asked_degrees;
+    bool mechanics_known = false;
+    std::string completion_note;
+    std::optional<double> steady_degrees;
+    SteadyTime steady_since{};
   };
   struct Valve {
     std::optional<double> position;
     unsigned dps = 0;               // 0: not reported yet
+    std::optional<unsigned> speed;  // the speed it last reported, and when
+    SteadyTime speed_heard_at{};
     std::optional<Tracked> motion;  // the run command the valve is working on
     std::vector<Tracked> requests;  // awaiting their replies
     std::string commander;          // who last drove this valve
   };
 
+  // A move whose valve holds still short of its target: the reason to end it, or none yet.
+  // Keeps where and since when the move's position has been steady.
+  static std::optional<std::string> stopped_short(Tracked& move, const Valve& valve, double degrees,
+                                                  SteadyTime now);
   void end_motion(Valve& valve, CommandState state, const std::string& reason, Outcome& out);
   void end_request(std::uint32_t serial, const Tracked& request, CommandState state,
                    const std::string& reason, Outcome& out);
