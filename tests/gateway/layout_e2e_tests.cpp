@@ -96,7 +96,45 @@ TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   gateway->stop();
 }
 
-// valvectl as the person at the machine runs it, with its exit status and what it printed.
+// valvectl run to its end; its exit status and what it printed.
+teejet::testing::Finished valvectl(int domain, std::vector<std::string> arguments);
+
+TEST(LayoutEndToEnd, APlaceNamesItsValveWhereverASerialWouldAndIdentifyJogsItBack) {
+  auto config = sim_config("gw-layout", 6);
+  config.bridge.layout = six_places();
+  auto gateway = make_gateway(config);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
+  const int domain = config.domain;
+
+  // 0..90 by the layout's default: 120 is clamped, and the completion says so.
+  const auto moved = valvectl(domain, {"move", "section-01", "--to", "120", "--wait"});
+  EXPECT_EQ(moved.exit_code, 0) << describe(moved);
+  EXPECT_NE(moved.out.find("TJV000001 target_degrees #"), std::string::npos) << moved.out;
+  EXPECT_NE(moved.out.find(": COMPLETED: stopped at 90.0, the Opened Degrees of section-01 "
+                           "(asked 120.0)\n"),
+            std::string::npos)
+      << moved.out;
+
+  const auto identified = valvectl(domain, {"identify", "section-03"});
+  EXPECT_EQ(identified.exit_code, 0) << describe(identified);
+  std::size_t completed = 0;
+  for (std::size_t at = 0; (at = identified.out.find(": COMPLETED", at)) != std::string::npos;
+       ++at) {
+    ++completed;
+  }
+  EXPECT_EQ(completed, 4u) << identified.out;  // two jogs out and back
+  EXPECT_NE(identified.out.find("TJV000003 at section-03: identified, back at 0.0\n"),
+            std::string::npos)
+      << identified.out;
+
+  const auto missing = valvectl(domain, {"stop", "left-master"});
+  EXPECT_EQ(missing.exit_code, 2) << describe(missing);
+  EXPECT_NE(missing.err.find("TJV000099"), std::string::npos) << missing.err;
+  const auto typo = valvectl(domain, {"stop", "Section-01"});
+  EXPECT_EQ(typo.exit_code, 64) << describe(typo);
+  gateway->stop();
+}
+
 teejet::testing::Finished valvectl(int domain, std::vector<std::string> arguments) {
   arguments.insert(arguments.begin(), {VALVECTL_PATH, "--domain", std::to_string(domain)});
   teejet::testing::Subprocess run(arguments);

@@ -110,8 +110,8 @@ TEST(ValvectlCommandLine, StopTakesOneSerialOrAll) {
   const auto all = command_of({"stop", "--all"});
   EXPECT_TRUE(all.every_online_valve);
   EXPECT_TRUE(all.serials.empty());
-  EXPECT_NE(usage_error({"stop"}).find("SERIAL or --all"), std::string::npos);
-  EXPECT_NE(usage_error({"stop", "42", "--all"}).find("SERIAL or --all"), std::string::npos);
+  EXPECT_NE(usage_error({"stop"}).find("VALVE or --all"), std::string::npos);
+  EXPECT_NE(usage_error({"stop", "42", "--all"}).find("VALVE or --all"), std::string::npos);
 }
 
 // Moving every section of a boom is what a person does: move, stop, jog and clear-errors take
@@ -125,13 +125,13 @@ TEST(ValvectlCommandLine, MoveJogAndClearErrorsTakeAllAndAGateway) {
   EXPECT_TRUE(command_of({"jog", "--all", "--ms", "100"}).every_online_valve);
   EXPECT_TRUE(command_of({"clear-errors", "--all"}).every_online_valve);
   EXPECT_EQ(command_of({"stop", "--all", "--gateway", "rig-1"}).only_gateway, "rig-1");
-  EXPECT_NE(usage_error({"move", "--to", "20"}).find("move: give either a SERIAL or --all"),
+  EXPECT_NE(usage_error({"move", "--to", "20"}).find("move: give either a VALVE or --all"),
             std::string::npos);
   EXPECT_NE(usage_error({"move", "5", "--gateway", "rig-2", "--to", "20"})
                 .find("move: --gateway selects valves for --all"),
             std::string::npos);
   // A manual drive runs until told otherwise: one valve at a time.
-  EXPECT_NE(usage_error({"manual", "--all", "--speed", "40"}).find("SERIAL is required"),
+  EXPECT_NE(usage_error({"manual", "--all", "--speed", "40"}).find("VALVE is required"),
             std::string::npos);
 }
 
@@ -220,7 +220,8 @@ TEST(ValvectlCommandLine, OutOfRangeValuesAreRefusedWithTheRange) {
 }
 
 TEST(ValvectlCommandLine, BadSerialsAreRefused) {
-  EXPECT_NE(usage_error({"move", "TJVabc", "--to", "1"}).find("invalid SERIAL"), std::string::npos);
+  EXPECT_NE(usage_error({"move", "TJVabc", "--to", "1"}).find("invalid VALVE 'TJVabc'"),
+            std::string::npos);
   EXPECT_NE(usage_error({"move", "16777216", "--to", "1"}).find("24 bits"), std::string::npos);
   usage_error({"clear-errors", "TJ123"});
 }
@@ -247,8 +248,8 @@ TEST(ValvectlCommandLine, HelpExitsZeroOnStandardOutput) {
 // CLI11 makes 0 of an empty value.
 TEST(ValvectlCommandLine, EmptyValuesAreRefusedNamingTheOption) {
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
-      {{"move", "", "--to", "10"}, "SERIAL: the value is empty"},
-      {{"stop", ""}, "SERIAL: the value is empty"},
+      {{"move", "", "--to", "10"}, "VALVE: the value is empty"},
+      {{"stop", ""}, "VALVE: the value is empty"},
       {{"move", "1", "--to", ""}, "--to: the value is empty"},
       {{"move", "1", "--to", "10", "--speed", ""}, "--speed: the value is empty"},
       {{"move", "1", "--to", "10", "--direction", ""}, "--direction: the value is empty"},

@@ -22,7 +22,9 @@ namespace {
 constexpr const char* kDescription =
     "Lists, watches and commands TeeJet CAN valves through teejet-gateway over DDS.";
 
-constexpr const char* kFooter = R"(A SERIAL is TJV123456 or 123456.
+constexpr const char* kFooter =
+    R"(A SERIAL is TJV123456 or 123456. A VALVE is a SERIAL, or the location the
+valve sits at in its gateway's layout (section-03).
 
 Exit status: 0 done; 2 no gateway, or no gateway knows the valve; 3 the gateway rejected the
 command; 4 the command timed out, or no status arrived in time; 5 a newer command superseded it;
@@ -61,6 +63,7 @@ struct Parser {
   CLI::App* watch = nullptr;
   CLI::App* layout = nullptr;
   CLI::App* assign = nullptr;
+  CLI::App* identify = nullptr;
   CLI::App* unassign = nullptr;
   CLI::App* move = nullptr;
   CLI::App* stop = nullptr;
@@ -123,9 +126,17 @@ void add_serial(CLI::App* subcommand, RawArguments& raw, bool required = true) {
       ->required(required);
 }
 
+// SERIAL, or the name of the place the valve sits at in its gateway's layout.
+void add_valve(CLI::App* subcommand, RawArguments& raw, bool required = true) {
+  subcommand
+      ->add_option("VALVE", raw.serial,
+                   "the valve: its serial (TJV123456 or 123456) or its location (section-03)")
+      ->required(required);
+}
+
 // SERIAL, or --all [--gateway NAME]: what a person does to a whole boom.
 void add_serial_or_all(CLI::App* subcommand, RawArguments& raw) {
-  add_serial(subcommand, raw, /*required=*/false);
+  add_valve(subcommand, raw, /*required=*/false);
   subcommand->add_flag("--all", raw.all, "every online valve of every gateway, one command each");
   subcommand->add_option("--gateway", raw.gateway,
                          "with --all: only the valves of the gateway of this name (one boom)");
@@ -216,6 +227,12 @@ void define(Parser& parser) {
       app.add_subcommand("unassign", "leave a place of the layout empty (its valve taken off)");
   add_location(parser.unassign);
 
+  parser.identify = app.add_subcommand(
+      "identify",
+      "make a valve visibly move for the person at the boom: two short jogs out and "
+      "back, ending where it started");
+  add_valve(parser.identify, raw);
+
   parser.move = app.add_subcommand("move", "turn a valve to a position (Target Degrees)");
   add_serial_or_all(parser.move, raw);
   parser.move->add_option("--to", raw.degrees, "target position in degrees, 0 to 359.9")
@@ -229,7 +246,7 @@ void define(Parser& parser) {
 
   parser.manual =
       app.add_subcommand("manual", "drive a valve until told otherwise (stays ACCEPTED)");
-  add_serial(parser.manual, raw);
+  add_valve(parser.manual, raw);
   add_drive(parser.manual, raw, /*required=*/true, /*shortest=*/false);
 
   parser.jog = app.add_subcommand("jog", "drive a valve for a time (Milliseconds to Run)");
@@ -245,7 +262,7 @@ void define(Parser& parser) {
   add_wait(parser, parser.clear_errors, "wait until the clear is completed");
 
   parser.request = app.add_subcommand("request", "ask a valve to send a value");
-  add_serial(parser.request, raw);
+  add_valve(parser.request, raw);
   parser.request->add_option("WHAT", raw.what, telemetry_words())->required();
   parser.request
       ->add_option("--every", raw.every_tenths,
@@ -256,7 +273,7 @@ void define(Parser& parser) {
   add_wait(parser, parser.request, "wait for the reply and print it");
 
   parser.baud = app.add_subcommand("baud", "request or set a valve's CAN bit rate");
-  add_serial(parser.baud, raw);
+  add_valve(parser.baud, raw);
   parser.baud->add_flag("--request", raw.baud_request, "ask the valve for its bit rate");
   parser.bit_rate = parser.baud->add_option(
       "--set", raw.bit_rate, "set the bit rate, 250000 or 500000 (the gateway must allow it)");
@@ -307,7 +324,7 @@ void build_command(Parser& parser, CLI::App* used) {
   // The subcommands given add_serial_or_all().
   if (used->get_option_no_throw("--all") != nullptr) {
     if (raw.all == !raw.serial.empty()) {
-      usage_error(request.subcommand + ": give either a SERIAL or --all");
+      usage_error(request.subcommand + ": give either a VALVE or --all");
     }
     if (!raw.gateway.empty() && !raw.all) {
       usage_error(request.subcommand + ": --gateway selects valves for --all");
@@ -315,7 +332,21 @@ void build_command(Parser& parser, CLI::App* used) {
     request.every_online_valve = raw.all;
     request.only_gateway = raw.gateway;
   }
-  if (!raw.serial.empty()) request.serials.push_back(checked_serial(raw.serial));
+  if (!raw.serial.empty()) {
+    const auto serial = codec::parse_serial(raw.serial);
+    if (serial) {
+      request.serials.push_back(*serial);
+    } else if (layout::check_name(raw.serial)) {
+      request.location = raw.serial;
+    } else {
+      const bool serial_like = (raw.serial.front() >= '0' && raw.serial.front() <= '9') ||
+                               raw.serial.substr(0, 3) == "TJV" || raw.serial.substr(0, 3) == "tjv";
+      usage_error("invalid VALVE '" + raw.serial + "': " +
+                  (serial_like ? serial.error().reason
+                               : "neither a serial (TJV123456 or 123456) nor a location name "
+                                 "(lower-case letters, digits and '-', starting with a letter)"));
+    }
+  }
 
   const std::int64_t speed = raw.speed;
   if (used == parser.move) {
@@ -383,7 +414,7 @@ void build_invocation(Parser& parser) {
           seconds_option("--duration", parser.raw.duration_seconds, kMaxWatchSeconds);
     }
   } else {
-    invocation.subcommand = Subcommand::kCommand;
+    invocation.subcommand = used == parser.identify ? Subcommand::kIdentify : Subcommand::kCommand;
     build_command(parser, used);
   }
 }

@@ -39,6 +39,7 @@ struct WatchOptions {
 struct CommandRequest {
   std::string subcommand;                         // "move", for messages
   std::vector<std::uint32_t> serials;             // the valves named on the command line
+  std::string location;                           // or the place of the valve, in a layout
   bool every_online_valve = false;                // --all (move, stop, jog, clear-errors)
   std::string only_gateway;                       // with --all: only this gateway's valves
   ValveCommand command;                           // serial, command_id and origin are set per send
@@ -54,7 +55,7 @@ struct LayoutChangeRequest {
   bool move = false;         // assign: take the valve from the place it sits at now
 };
 
-enum class Subcommand { kList, kWatch, kLayout, kLayoutChange, kCommand };
+enum class Subcommand { kList, kWatch, kLayout, kLayoutChange, kIdentify, kCommand };
 
 struct Invocation {
   GlobalOptions global;

@@ -1,6 +1,7 @@
 #include "session.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <ctime>
 #include <iomanip>
 #include <optional>
@@ -34,6 +35,10 @@ constexpr milliseconds kReplyGrace{1000};
 constexpr milliseconds kProgressPeriod{100};
 // How long a run without --command-readers waits for its commands' acknowledgements on exit.
 constexpr milliseconds kDeliveryWait{1000};
+// identify: how far each jog goes, how many there are, and how long one may take at most.
+constexpr double kJogDegrees = 10.0;
+constexpr int kJogs = 2;
+constexpr milliseconds kJogTimeout{30000};
 // Longest wait before watch's first frame, so it does not start with an empty table.
 constexpr milliseconds kWatchFirstFrame{2000};
 
@@ -83,6 +88,8 @@ class Session {
         return layout();
       case Subcommand::kLayoutChange:
         return layout_change();
+      case Subcommand::kIdentify:
+        return identify();
       case Subcommand::kCommand:
         return command();
     }
@@ -166,13 +173,10 @@ class Session {
     return kExitOk;
   }
 
-  // assign and unassign: to the one gateway whose layout holds the place.
-  int layout_change() {
-    const LayoutChangeRequest& request = invocation_.layout_change;
-    const Deadline until = after_timeout();
-    const auto named = [&](const ValveTable& table) {
-      return table.locations_named(request.location);
-    };
+  // The one place called `name` among the gateways' layouts, or the exit status that says why
+  // there is none: no gateway has it, or two claim it (nothing is sent to either).
+  std::variant<LocationRow, int> find_place(const std::string& name, Deadline until) {
+    const auto named = [&](const ValveTable& table) { return table.locations_named(name); };
     view_.wait_until(
         [&](const ValveTable& table) {
           return table.directory_complete() && !named(table).empty();
@@ -186,20 +190,28 @@ class Session {
       return kExitNotFound;
     }
     if (places.empty()) {
-      complain("no gateway on " + domain_text() + " has a location '" + request.location +
-               "' in its layout" +
+      complain("no gateway on " + domain_text() + " has a location '" + name + "' in its layout" +
                (table.directory_complete() ? "" : " (discovery was still going on)"));
       return kExitNotFound;
     }
     if (places.size() > 1) {
       std::string gateways;
       for (const auto& place : places) gateways += (gateways.empty() ? "" : ", ") + place.gateway;
-      complain("location '" + request.location + "' is in the layouts of " +
-               std::to_string(places.size()) + " gateways (" + gateways +
+      complain("location '" + name + "' is in the layouts of " + std::to_string(places.size()) +
+               " gateways (" + gateways +
                "): a name belongs to one; rename it in all but one layout. Nothing was sent");
       return kExitRejected;
     }
-    const LocationRow& place = places.front();
+    return places.front();
+  }
+
+  // assign and unassign: to the one gateway whose layout holds the place.
+  int layout_change() {
+    const LayoutChangeRequest& request = invocation_.layout_change;
+    const Deadline until = after_timeout();
+    auto found = find_place(request.location, until);
+    if (const int* exit_code = std::get_if<int>(&found)) return *exit_code;
+    const LocationRow& place = std::get<LocationRow>(found);
     auto made = LayoutClient::create(*participant_, default_origin("valvectl"));
     if (!made) {
       complain(made.error().reason);
@@ -282,6 +294,103 @@ class Session {
     if (!invocation_.global.json && !terminal_.out_is_tty) terminal_.out << '\n' << std::flush;
   }
 
+  // ---- identify ------------------------------------------------------------------------
+
+  // Two jogs of kJogDegrees out and back with Target Degrees, within the place's mechanics (or
+  // inside 0..359.9), each followed to COMPLETED; the valve ends where it started.
+  int identify() {
+    auto targets = find_targets();
+    if (const int* exit_code = std::get_if<int>(&targets)) return *exit_code;
+    const std::uint32_t serial = std::get<std::vector<std::uint32_t>>(targets).front();
+    const std::string valve = codec::format_serial(serial);
+    view_.wait_until(
+        [&](const ValveTable& table) {
+          const auto row = table.row(serial);
+          return row && row->position_degrees();
+        },
+        after_timeout(), terminal_.interrupted);
+    if (terminal_.interrupted) return kExitInterrupted;
+    const ValveTable table = view_.snapshot();
+    const auto row = table.row(serial);
+    if (!row || !row->online || row->gateway_lost) {
+      complain(valve + " is not online: nothing to identify");
+      return kExitNotFound;
+    }
+    if (!row->position_degrees()) {
+      complain("no position from " + valve + " within " + seconds_text(invocation_.global.timeout) +
+               "; it was not moved");
+      return kExitTimedOut;
+    }
+    const double start = *row->position_degrees();
+    double low = 0.0;
+    double high = 359.9;
+    for (const auto& place : table.locations()) {
+      if (place.serial == serial && place.opened_degrees && *place.opened_degrees < 360.0) {
+        low = *place.closed_degrees;
+        high = *place.opened_degrees;
+      }
+    }
+    const bool out_opens = start + kJogDegrees <= high || start - kJogDegrees < low;
+    const double out = std::clamp(start + (out_opens ? kJogDegrees : -kJogDegrees), low, high);
+
+    auto made = CommandClient::create(*participant_, default_origin("valvectl"));
+    if (!made) {
+      complain(made.error().reason);
+      return kExitFailure;
+    }
+    CommandClient& client = **made;
+    const auto connected =
+        client.connect({row->participant}, 0, after_timeout(), terminal_.interrupted);
+    if (!connected || !*connected) {
+      if (terminal_.interrupted) return kExitInterrupted;
+      complain(connected ? "gateway " + row->gateway + " did not subscribe to commands within " +
+                               seconds_text(invocation_.global.timeout) + "; it was not moved"
+                         : connected.error().reason);
+      return connected ? kExitNotFound : kExitFailure;
+    }
+    for (int jog = 0; jog < kJogs; ++jog) {
+      for (const auto& [to, opening] : {std::pair{out, out_opens}, std::pair{start, !out_opens}}) {
+        if (const int failed = jog_to(client, serial, to, opening); failed != kExitOk) {
+          return failed;
+        }
+      }
+    }
+    const auto place = row->location.empty() ? std::string() : " at " + row->location;
+    emit(valve + place + ": identified, back at " + one_decimal(start),
+         {{"event", "identified"},
+          {"serial", valve},
+          {"location", row->location},
+          {"degrees", start}});
+    return kExitOk;
+  }
+
+  // One Target Degrees of identify, followed to its final status.
+  int jog_to(CommandClient& client, std::uint32_t serial, double degrees, bool opening) {
+    ValveCommand command;
+    command.serial(serial);
+    command.kind(COMMAND_TARGET_DEGREES);
+    command.speed_percent(100);
+    command.direction(opening ? DIRECTION_OPEN : DIRECTION_CLOSE);
+    command.degrees(static_cast<float>(std::round(degrees * 10.0) / 10.0));
+    const auto id = client.send(command);
+    if (!id) {
+      complain("could not write the command for " + codec::format_serial(serial));
+      return kExitFailure;
+    }
+    const Deadline until = Clock::now() + kJogTimeout;
+    while (true) {
+      const auto status = client.next_status(*id, until);
+      if (!status) {
+        complain("no final status for command #" + std::to_string(*id) + " to " +
+                 codec::format_serial(serial) + " within " + seconds_text(kJogTimeout));
+        return kExitTimedOut;
+      }
+      emit(status_text(*status), status_json(*status));
+      if (status->state() == COMMAND_ACCEPTED) continue;
+      return exit_code_of(status->state());
+    }
+  }
+
   // ---- Commands --------------------------------------------------------------------------
 
   // The serials to command, or the exit status that says why there are none.
@@ -317,7 +426,22 @@ class Session {
       }
       return online;
     }
-    for (const std::uint32_t serial : request.serials) {
+    std::vector<std::uint32_t> serials = request.serials;
+    std::string located;  // what the serial of a location given is called in messages
+    if (!request.location.empty()) {
+      auto place = find_place(request.location, until);
+      if (const int* exit_code = std::get_if<int>(&place)) return *exit_code;
+      const LocationRow& row = std::get<LocationRow>(place);
+      if (!row.serial) {
+        complain(row.name + " on " + row.gateway +
+                 " is empty: no valve sits there (valvectl "
+                 "assign puts one there)");
+        return kExitNotFound;
+      }
+      located = " (at " + row.name + ")";
+      serials = {*row.serial};
+    }
+    for (const std::uint32_t serial : serials) {
       // Done when the valve shows up, or early when every gateway has told all it knows.
       view_.wait_until(
           [&](const ValveTable& table) { return table.row(serial) || table.directory_complete(); },
@@ -325,10 +449,10 @@ class Session {
       if (terminal_.interrupted) return kExitInterrupted;
       const ValveTable table = view_.snapshot();
       if (table.row(serial)) continue;
-      complain(not_found_text(table, serial));
+      complain(not_found_text(table, serial) + located);
       return kExitNotFound;
     }
-    return request.serials;
+    return serials;
   }
 
   // Why `serial` is not in `table`, saying how far discovery got: a valve is called unknown
