@@ -271,6 +271,25 @@ TEST(GatewayConfig, TheChurnReachesTheEmbeddedSimulator) {
   backend->simulator->stop();
 }
 
+TEST(GatewayConfig, SimulatedValvesMayHaveChosenSerials) {
+  auto config = parse("simulator: {serials: [TJV000107, 102, TJV000250]}");
+  EXPECT_EQ(config.sim_serials, (std::vector<std::uint32_t>{107, 102, 250}));
+  config.can = "sim:3";
+  auto backend = make_bus_backend(config);
+  ASSERT_TRUE(backend) << backend.error().reason;
+  ASSERT_TRUE(backend->simulator->start());
+  EXPECT_EQ(backend->simulator->assignments(),
+            (std::vector<sim::Assignment>{{102, 0xD8}, {107, 0xD9}, {250, 0xDA}}));
+  backend->simulator->stop();
+  config.can = "sim:4";
+  EXPECT_EQ(make_bus_backend(config).error().reason,
+            "--can sim:4: simulator.serials lists 3 serials for 4 valves");
+  EXPECT_EQ(error_of("simulator: {serials: [1, 2, 1]}"),
+            "test.yaml:1: simulator.serials: TJV000001 is listed twice");
+  EXPECT_EQ(error_of("simulator:\n  first_serial: 5\n  serials: [1]"),
+            "test.yaml:3: simulator.serials: give first_serial or serials, not both");
+}
+
 TEST(GatewayConfig, SimulatedValveCount) {
   EXPECT_EQ(*simulated_valve_count("can0"), std::nullopt);
   EXPECT_EQ(*simulated_valve_count("sim:4"), 4);

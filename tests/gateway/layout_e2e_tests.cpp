@@ -213,5 +213,59 @@ TEST(LayoutEndToEnd, AReplacementIsAssignedOverDdsSavedAndKeptAcrossARestart) {
   gateway->stop();
 }
 
+TEST(LayoutEndToEnd, AnEcuSeesAReplacementAsItHappensAndAnAssignmentPutsTheNewValveInPlace) {
+  teejet::testing::ScratchDir dir;
+  const std::string file = dir / "boom.yaml";
+  std::vector<layout::Location> places;
+  for (unsigned i = 1; i <= 6; ++i) {
+    places.push_back({.name = "section-0" + std::to_string(i), .order = i, .serial = 100 + i});
+  }
+  ASSERT_TRUE(layout::save_layout_file(file, *layout::Layout::make(places)));
+  auto config = sim_config("gw-boom", 6);
+  config.sim_serials = {101, 102, 103, 104, 105, 106};
+  config.layout_file = file;
+  ASSERT_TRUE(read_layout_file(config));
+  auto gateway = make_gateway(config);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
+  DdsPeer ecu(config.domain, "boom-ecu");
+  auto* locations = ecu.reader<ValveLocation>();
+  auto* presence = ecu.reader<ValvePresence>();
+  ASSERT_NE(locations, nullptr);
+  ASSERT_NE(presence, nullptr);
+  std::map<std::string, ValveLocation> seen;
+  std::map<std::uint32_t, ValvePresence> valves;
+  const auto place = [&] {
+    latest_by(locations, seen,
+              [](const ValveLocation& sample) { return sample.location().to_string(); });
+    // Before the first sample, none: a default ValveLocation would read LOCATION_OK.
+    return seen.contains("section-03") ? seen.at("section-03") : ValveLocation{};
+  };
+  const auto holds = [&](std::uint32_t serial, LocationState state) {
+    const auto now = place();
+    return now.serial() == serial && now.state() == state;
+  };
+  ASSERT_TRUE(eventually([&] { return holds(103, LOCATION_OK); }, 15s));
+
+  // The valve at section-03 is taken off and another, TJV000203, fitted in its place.
+  ASSERT_TRUE(gateway->simulator()->replace_valve(103, 203));
+  ASSERT_TRUE(eventually([&] { return holds(103, LOCATION_MISSING); }, 15s));
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest_by_serial(presence, valves);
+        return valves.contains(203) && valves.at(203).online();
+      },
+      15s));
+  EXPECT_EQ(valves.at(203).location().to_string(), "");
+
+  const auto assigned = valvectl(config.domain, {"assign", "section-03", "TJV000203"});
+  EXPECT_EQ(assigned.exit_code, 0) << describe(assigned);
+  EXPECT_EQ(assigned.out,
+            "section-03 on gw-boom: APPLIED: TJV000203 sits there (TJV000103 left it)\n");
+  ASSERT_TRUE(eventually([&] { return holds(203, LOCATION_OK); }, 15s));
+  ASSERT_TRUE(eventually(
+      [&] { return latest_by_serial(presence, valves).at(203).location() == "section-03"; }, 15s));
+  gateway->stop();
+}
+
 }  // namespace
 }  // namespace teejet::gateway

@@ -227,6 +227,26 @@ TEST_F(SimRuntime, AValveAddedAtRunTimeReshufflesTheAddresses) {
                }).empty());
 }
 
+TEST_F(SimRuntime, AReplacedValveFallsSilentAndItsSuccessorClaimsAnAddressWithItsSettings) {
+  auto old_valve = valve_with(30, 30.0);
+  old_valve.opened_degrees = 80.0;
+  start(options_for({valve_with(10, 10.0), old_valve}));
+  EXPECT_FALSE(simulator->replace_valve(31, 40));  // no such valve
+  EXPECT_FALSE(simulator->replace_valve(30, 10));  // the new serial is taken
+  EXPECT_EQ(simulator->assignments(), (std::vector<Assignment>{{10, 0xD8}, {30, 0xD9}}));
+  ASSERT_TRUE(simulator->replace_valve(30, 20));
+  EXPECT_EQ(simulator->assignments(), (std::vector<Assignment>{{10, 0xD8}, {20, 0xD9}}));
+  EXPECT_EQ(simulator->inspect([](const ValveBank& bank) {
+    return bank.valve_with_serial(20)->config().opened_degrees;
+  }),
+            80.0);
+  clock->advance(kIAmHereStagger);
+  EXPECT_FALSE(until([](const Received& r) {
+                 return r.address == 0xD9 &&
+                        r.message == codec::FromValveMessage{codec::IAmHere{0, 20, false}};
+               }).empty());
+}
+
 TEST_F(SimRuntime, InjectedErrorsRepeatUntilClearErrorsOverTheBus) {
   auto options = options_for({valve_with(1), valve_with(2)});
   options.errors.push_back({2, codec::LowVoltageError{9.5, 10.0}});

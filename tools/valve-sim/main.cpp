@@ -40,7 +40,8 @@ constexpr const char* kFooter = R"(Examples:
 Addresses: valves are ranked by serial, lowest first: the lowest takes 0xD8, the next 0xD9, ...
 Signals: SIGINT/SIGTERM stop cleanly (exit 0). SIGUSR1 adds a valve at run time (the next
 `hotplug:` entry of --config, else one serial below the lowest), which moves the valves above
-it up one address, as the protocol sheet warns.
+it up one address, as the protocol sheet warns. SIGUSR2 makes the next --replace OLD:NEW: OLD
+falls silent and NEW, with its settings, claims an address (a valve replaced on the machine).
 
 Exit status: 0 after SIGINT/SIGTERM, 1 when the bus cannot be opened, 2 on usage errors.
 See docs/valve-sim.md for the config file and every behaviour.)";
@@ -105,8 +106,20 @@ struct Arguments {
   std::string opening_direction;
   std::string config_path;
   std::vector<std::string> error_specs;
+  std::vector<std::string> replace_specs;
   bool verbose = false;
 };
+
+// --replace OLD:NEW, as serials.
+teejet::Result<std::pair<std::uint32_t, std::uint32_t>> parse_replacement(const std::string& spec) {
+  const auto colon = spec.find(':');
+  if (colon == std::string::npos) return usage("--replace " + spec + ": expected OLD:NEW");
+  const auto old_serial = codec::parse_serial(spec.substr(0, colon));
+  const auto new_serial = codec::parse_serial(spec.substr(colon + 1));
+  if (!old_serial) return usage("--replace " + spec + ": " + old_serial.error().reason);
+  if (!new_serial) return usage("--replace " + spec + ": " + new_serial.error().reason);
+  return std::pair{*old_serial, *new_serial};
+}
 
 void add_options(CLI::App& app, Arguments& arguments) {
   app.add_option("--can", arguments.can_spec,
@@ -154,6 +167,10 @@ void add_options(CLI::App& app, Arguments& arguments) {
                      kinds +
                      " (a kind with a direction takes :open or :close at the end); repeatable")
       ->type_name("SERIAL:KIND:VALUE:LIMIT");
+  app.add_option("--replace", arguments.replace_specs,
+                 "on each SIGUSR2 the next of these: valve OLD falls silent and NEW, with its "
+                 "settings, takes its place (TJV000003:TJV000107); repeatable")
+      ->type_name("OLD:NEW");
   app.add_flag("-v,--verbose", arguments.verbose, "log every frame received and sent, decoded");
 }
 
@@ -206,12 +223,14 @@ sigset_t block_signals() {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGUSR1);
+  sigaddset(&signals, SIGUSR2);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   return signals;
 }
 
-// Adds a valve on every SIGUSR1; returns on SIGINT or SIGTERM.
+// Adds a valve on every SIGUSR1, replaces one on every SIGUSR2; returns on SIGINT or SIGTERM.
 void serve_signals(const sigset_t& signals, sim::Simulator& simulator, const sim::Setup& setup,
+                   std::deque<std::pair<std::uint32_t, std::uint32_t>> replacements,
                    spdlog::logger& logger) {
   std::deque<sim::ValveConfig> hotplug(setup.hotplug.begin(), setup.hotplug.end());
   for (;;) {
@@ -219,6 +238,18 @@ void serve_signals(const sigset_t& signals, sim::Simulator& simulator, const sim
     if (sigwait(&signals, &received) != 0) continue;
     if (received == SIGUSR1) {
       add_valve(simulator, setup, hotplug, logger);
+      continue;
+    }
+    if (received == SIGUSR2) {
+      if (replacements.empty()) {
+        logger.error("SIGUSR2: no valve replaced: no --replace left");
+        continue;
+      }
+      const auto [old_serial, new_serial] = replacements.front();
+      replacements.pop_front();
+      if (const auto replaced = simulator.replace_valve(old_serial, new_serial); !replaced) {
+        logger.error("SIGUSR2: {}", replaced.error().reason);
+      }
       continue;
     }
     logger.info("{}: stopping", received == SIGINT ? "SIGINT" : "SIGTERM");
@@ -240,6 +271,12 @@ int main(int argc, char** argv) {
   }
   const auto setup = setup_of(app, arguments);
   if (!setup) return usage_error(setup.error().reason);
+  std::deque<std::pair<std::uint32_t, std::uint32_t>> replacements;
+  for (const auto& spec : arguments.replace_specs) {
+    const auto replacement = parse_replacement(spec);
+    if (!replacement) return usage_error(replacement.error().reason);
+    replacements.push_back(*replacement);
+  }
 
   const sigset_t signals = block_signals();
   const auto logger = make_logger();
@@ -253,9 +290,11 @@ int main(int argc, char** argv) {
     std::cerr << "valve-sim: " << started.error().reason << '\n';
     return kExitBus;
   }
-  logger->info("simulating {} valve(s) on {}; SIGUSR1 adds one, SIGINT/SIGTERM stop",
-               setup->valves.size(), arguments.can_spec);
-  serve_signals(signals, simulator, *setup, *logger);
+  logger->info(
+      "simulating {} valve(s) on {}; SIGUSR1 adds one, SIGUSR2 replaces one, "
+      "SIGINT/SIGTERM stop",
+      setup->valves.size(), arguments.can_spec);
+  serve_signals(signals, simulator, *setup, std::move(replacements), *logger);
   simulator.stop();
   logger->info("sent {} frames, handled {}", simulator.frames_sent(), simulator.frames_handled());
   return 0;

@@ -12,11 +12,18 @@
 namespace teejet::gateway {
 namespace {
 
-std::vector<sim::ValveConfig> simulated_valves(const GatewayConfig& config, int count) {
+Result<std::vector<sim::ValveConfig>> simulated_valves(const GatewayConfig& config, int count) {
+  if (!config.sim_serials.empty() && config.sim_serials.size() != static_cast<std::size_t>(count)) {
+    return Error{ErrorCode::kInvalidValue, "--can " + config.can + ": simulator.serials lists " +
+                                               std::to_string(config.sim_serials.size()) +
+                                               " serials for " + std::to_string(count) + " valves"};
+  }
   std::vector<sim::ValveConfig> valves;
   for (int i = 0; i < count; ++i) {
     sim::ValveConfig valve;
-    valve.serial = config.sim_first_serial + static_cast<std::uint32_t>(i);
+    valve.serial = config.sim_serials.empty()
+                       ? config.sim_first_serial + static_cast<std::uint32_t>(i)
+                       : config.sim_serials[static_cast<std::size_t>(i)];
     valve.degrees_per_second = config.sim_degrees_per_second;
     valve.closed_degrees = config.sim_closed_degrees;
     valve.opened_degrees = config.sim_opened_degrees;
@@ -54,11 +61,13 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
   static std::atomic<int> instances{0};
   const std::string bus_name =
       "teejet-sim-" + std::to_string(::getpid()) + "-" + std::to_string(++instances);
+  auto valves = simulated_valves(config, **simulated);
+  if (!valves) return valves.error();
   BusBackend backend;
   backend.simulator = std::make_unique<sim::Simulator>(
       std::make_unique<can::VirtualBus>(bus_name,
                                         can::VirtualBusOptions{can::valve_side_filters()}),
-      sim::SimulatorOptions{.valves = simulated_valves(config, **simulated),
+      sim::SimulatorOptions{.valves = std::move(*valves),
                             .errors = config.sim_errors,
                             .churn = {.period = config.sim_churn_period,
                                       .off_for = config.sim_churn_off_time(),

@@ -1,5 +1,6 @@
 #include "teejet/gateway/config.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <sstream>
@@ -171,13 +172,28 @@ std::string beside(const std::string& source, const std::string& path) {
 
 void read_simulator(const Reader& reader, const YAML::Node& s, GatewayConfig& config) {
   reader.expect_keys(s, "simulator",
-                     {"first_serial", "dps", "closed_deg", "opened_deg", "errors", "churn_period_s",
-                      "churn_seed"});
+                     {"first_serial", "serials", "dps", "closed_deg", "opened_deg", "errors",
+                      "churn_period_s", "churn_seed"});
   if (s["first_serial"]) {
     const auto serial =
         codec::parse_serial(reader.scalar(s["first_serial"], "simulator.first_serial"));
     if (!serial) reader.fail(s["first_serial"], "simulator.first_serial", serial.error().reason);
     config.sim_first_serial = *serial;
+  }
+  if (const auto serials = s["serials"]) {
+    reader.expect_list(serials, "simulator.serials", "serials (TJV123456 or 123456)");
+    if (s["first_serial"]) {
+      reader.fail(serials, "simulator.serials", "give first_serial or serials, not both");
+    }
+    for (const auto& entry : serials) {
+      const auto serial = codec::parse_serial(reader.scalar(entry, "simulator.serials"));
+      if (!serial) reader.fail(entry, "simulator.serials", serial.error().reason);
+      if (std::find(config.sim_serials.begin(), config.sim_serials.end(), *serial) !=
+          config.sim_serials.end()) {
+        reader.fail(entry, "simulator.serials", codec::format_serial(*serial) + " is listed twice");
+      }
+      config.sim_serials.push_back(*serial);
+    }
   }
   // The simulator checks the combination (closed below opened, ...) when it starts.
   if (s["dps"]) {

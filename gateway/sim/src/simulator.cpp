@@ -152,6 +152,30 @@ void Simulator::log_changes(const std::vector<AddressChange>& changes) const {
   }
 }
 
+Status Simulator::replace_valve(std::uint32_t old_serial, std::uint32_t new_serial,
+                                std::vector<AddressChange>* changes) {
+  ValveConfig config;
+  {
+    std::lock_guard lock(mutex_);
+    const auto* old_valve = bank_.valve_with_serial(old_serial);
+    if (old_valve == nullptr) {
+      return Error{ErrorCode::kInvalidValue,
+                   "no simulated valve " + codec::format_serial(old_serial) + " to replace"};
+    }
+    if (bank_.valve_with_serial(new_serial) != nullptr) {
+      return Error{ErrorCode::kInvalidValue,
+                   "a simulated valve " + codec::format_serial(new_serial) +
+                       " exists already; a replacement needs a new serial"};
+    }
+    config = old_valve->config();
+  }
+  config.serial = new_serial;
+  logger_->info("{} replaced by {}", codec::format_serial(old_serial),
+                codec::format_serial(new_serial));
+  if (auto off = power_off(old_serial, changes); !off) return off;
+  return add_valve(config, changes);
+}
+
 Status Simulator::power_off(std::uint32_t serial, std::vector<AddressChange>* changes) {
   std::vector<AddressChange> local;
   auto* out = changes ? changes : &local;

@@ -33,8 +33,10 @@ struct GatewayConfig {
   // Publish every frame the gateway sends and receives on teejet/can/frame. Off: no frame
   // topic or writer exists at all.
   bool record_frames = false;
-  // For --can sim:N: the embedded simulator's N valves, serials from sim_first_serial up.
+  // For --can sim:N: the embedded simulator's N valves, serials from sim_first_serial up, or
+  // these N serials (simulator.serials).
   std::uint32_t sim_first_serial = 1;
+  std::vector<std::uint32_t> sim_serials;
   double sim_degrees_per_second = 90.0;
   double sim_closed_degrees = 0.0;
   double sim_opened_degrees = 90.0;

@@ -91,6 +91,11 @@ class Simulator {
   Status power_on(std::uint32_t serial, bool boot_mode = false,
                   std::vector<AddressChange>* changes = nullptr);
   Status force_address(std::uint32_t serial, std::uint8_t address);
+  // A valve replaced on the machine: `old_serial` goes silent (powered off), a valve with its
+  // settings and `new_serial` powers up and claims an address. Refused, changing nothing, for an
+  // unknown old serial or a new one already in the bank.
+  Status replace_valve(std::uint32_t old_serial, std::uint32_t new_serial,
+                       std::vector<AddressChange>* changes = nullptr);
   // How many valves the churn has powered off so far.
   std::uint64_t churn_count() const { return churn_count_.load(); }
 
