@@ -46,7 +46,12 @@ class CycloneInterop : public ::testing::Test {
                              "  dps: 180\n"
                              "  opened_deg: 360\n"
                              "  errors: [\"TJV000003:high-voltage:16.2:15.5\",\n"
-                             "           \"TJV000004:low-current:0.05:0.1\"]\n";
+                             "           \"TJV000004:low-current:0.05:0.1\"]\n"
+                             // Two places, without mechanics: moves go as sent.
+                             "layout:\n"
+                             "  locations:\n"
+                             "    - {name: left-master, order: 1, role: master, serial: 4}\n"
+                             "    - {name: section-01, order: 2, serial: 1}\n";
     gateway_ = std::make_unique<Subprocess>(std::vector<std::string>{
         GATEWAY_PATH, "--can", "sim:" + std::to_string(kValves), "--domain",
         std::to_string(test_domain()), "--name", kGatewayName, "--allow-baud-change", "--log-level",
@@ -157,6 +162,34 @@ TEST_F(CycloneInterop, ALateJoinerSeesEveryValveAtOnce) {
     EXPECT_TRUE(seen[serial].online);
     EXPECT_STREQ(seen[serial].gateway, kGatewayName);
   }
+}
+
+TEST_F(CycloneInterop, AnEcuResolvesALocationToItsSerialAndCommandsIt) {
+  const auto locations = ecu_.state_reader(teejet_ValveLocation_desc, "teejet/valve/location");
+  std::map<std::string, teejet_ValveLocation> places;
+  const auto resolved = [&] {
+    for (const auto& taken : take_all<teejet_ValveLocation>(locations)) {
+      if (taken.info.valid_data) places[taken.sample.location] = taken.sample;
+    }
+    return places.contains("left-master") && places.at("left-master").state == teejet_LOCATION_OK;
+  };
+  ASSERT_TRUE(eventually(resolved, kDiscovery)) << places.size() << " places";
+  const auto& master = places.at("left-master");
+  EXPECT_STREQ(master.gateway, kGatewayName);
+  EXPECT_EQ(master.role, teejet_ROLE_MASTER);
+  EXPECT_EQ(master.order, 1u);
+  ASSERT_TRUE(master.assigned);
+  EXPECT_EQ(master.serial, 4u);
+  EXPECT_FALSE(master.mechanics_known);
+
+  auto move = command(master.serial, teejet_COMMAND_TARGET_DEGREES);
+  move.degrees = 90.0f;
+  EXPECT_EQ(states_of(move), kDone);
+  const auto presence = ecu_.state_reader(teejet_ValvePresence_desc, "teejet/valve/presence");
+  std::map<std::uint32_t, teejet_ValvePresence> seen;
+  ASSERT_TRUE(eventually([&] { return latest(presence, seen).contains(4); }, kDiscovery));
+  EXPECT_STREQ(seen[4].location, "left-master");
+  EXPECT_STREQ(seen[2].location, "");
 }
 
 TEST_F(CycloneInterop, EveryTelemetryTopicArrivesInEngineeringUnits) {
