@@ -2,9 +2,12 @@
 // layout with its serial and state, and each valve's presence naming its place.
 
 #include <gtest/gtest.h>
+#include <spdlog/sinks/ostream_sink.h>
+#include <spdlog/spdlog.h>
 
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 #include "gateway_fixture.hpp"
@@ -265,6 +268,51 @@ TEST(LayoutEndToEnd, AnEcuSeesAReplacementAsItHappensAndAnAssignmentPutsTheNewVa
   ASSERT_TRUE(eventually(
       [&] { return latest_by_serial(presence, valves).at(203).location() == "section-03"; }, 15s));
   gateway->stop();
+}
+
+TEST(LayoutEndToEnd, ANameTwoGatewaysClaimIsReportedByBoth) {
+  // Both gateways log through the process's default logger; the test reads it too.
+  std::ostringstream log;
+  auto sink = std::make_shared<spdlog::sinks::ostream_sink_mt>(log);
+  spdlog::default_logger()->sinks().push_back(sink);
+  const auto logged = [&] {
+    sink->flush();
+    return log.str();
+  };
+  auto left = sim_config("boom-left", 2);
+  left.bridge.layout = *layout::Layout::make(
+      {{.name = "section-01", .order = 1, .serial = 1}, {.name = "left-end", .order = 2}});
+  auto right = sim_config("boom-right", 2, 101);
+  right.domain = left.domain;
+  right.bridge.layout = *layout::Layout::make({{.name = "section-01", .order = 1, .serial = 101}});
+  auto a = make_gateway(left);
+  auto b = make_gateway(right);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*a, 2));
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*b, 2));
+  const std::string by_right =
+      "location section-01 of this gateway's layout is claimed by gateway boom-right too";
+  const std::string by_left =
+      "location section-01 of this gateway's layout is claimed by gateway boom-left too";
+  EXPECT_TRUE(eventually(
+      [&] {
+        const auto text = logged();
+        return text.find(by_right) != std::string::npos && text.find(by_left) != std::string::npos;
+      },
+      15s))
+      << logged();
+  EXPECT_EQ(logged().find("left-end of this gateway"), std::string::npos);
+
+  // valvectl refuses to guess which valve the name means.
+  const auto stopped = valvectl(left.domain, {"stop", "section-01"});
+  EXPECT_EQ(stopped.exit_code, 3) << describe(stopped);
+  EXPECT_NE(stopped.err.find("location 'section-01' is in the layouts of 2 gateways (boom-left, "
+                             "boom-right)"),
+            std::string::npos)
+      << stopped.err;
+  a->stop();
+  b->stop();
+  auto& sinks = spdlog::default_logger()->sinks();
+  sinks.erase(std::remove(sinks.begin(), sinks.end(), sink), sinks.end());
 }
 
 }  // namespace

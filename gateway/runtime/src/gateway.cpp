@@ -93,7 +93,10 @@ Status Gateway::start() {
        .announce_to_newcomers = true});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
-  auto publisher = dds::GatewayPublisher::create(*participant_, config_.bridge.gateway_name);
+  std::set<std::string> locations;
+  for (const auto& place : config_.bridge.layout.locations()) locations.insert(place.name);
+  auto publisher =
+      dds::GatewayPublisher::create(*participant_, config_.bridge.gateway_name, locations);
   if (!publisher) return fail(publisher.error());
   publisher_ = std::move(*publisher);
   if (config_.record_frames) {

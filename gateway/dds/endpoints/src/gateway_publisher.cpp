@@ -26,7 +26,8 @@ void report(const std::string& topic, const ReturnCode_t& result) {
 }  // namespace
 
 Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
-    Participant& participant, const std::string& gateway_name) {
+    Participant& participant, const std::string& gateway_name,
+    const std::set<std::string>& locations) {
   std::unique_ptr<GatewayPublisher> made(new GatewayPublisher());
   if (auto created = made->telemetry_.create(participant, topics::state_writer_qos()); !created) {
     return created.error();
@@ -58,6 +59,16 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
         "call a valve unknown before they have met every gateway; give the gateway role "
         "subscribe permission for it (config/security/roles/gateway.xml)",
         topics::kGatewayStatus, peers.error().reason);
+  }
+  if (!locations.empty()) {
+    if (auto claims = LocationClaims::create(participant, gateway_name, locations); claims) {
+      made->claims_ = std::move(*claims);
+    } else {
+      spdlog::warn(
+          "cannot read {} ({}): a location that another gateway claims too goes unnoticed; give "
+          "the gateway role subscribe permission for it (config/security/roles/gateway.xml)",
+          topics::kLocation, claims.error().reason);
+    }
   }
   return made;
 }

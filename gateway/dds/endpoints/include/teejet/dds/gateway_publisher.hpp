@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "teejet/bridge/bridge.hpp"
+#include "teejet/dds/location_claims.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/peer_gateways.hpp"
 #include "teejet/dds/source_stamps.hpp"
@@ -82,9 +83,11 @@ class SampleWriters<std::variant<Samples...>> {
 class GatewayPublisher final : public bridge::Sink {
  public:
   // `gateway_name` is the one its statuses carry: the other gateways it hears are counted
-  // against it (gateways_seen).
-  static Result<std::unique_ptr<GatewayPublisher>> create(Participant& participant,
-                                                          const std::string& gateway_name);
+  // against it (gateways_seen). `locations`: the names of its layout, which other gateways must
+  // not claim too.
+  static Result<std::unique_ptr<GatewayPublisher>> create(
+      Participant& participant, const std::string& gateway_name,
+      const std::set<std::string>& locations = {});
 
   void presence(const ValvePresence& sample) override;
   void location(const ValveLocation& sample) override;
@@ -109,7 +112,15 @@ class GatewayPublisher final : public bridge::Sink {
 
   // Deletes the reader of the other gateways' status. Call it before the participant goes,
   // which deletes the writers by itself but cannot be asked to delete a reader afterwards.
-  void stop_hearing_peers() { peers_.reset(); }
+  void stop_hearing_peers() {
+    peers_.reset();
+    claims_.reset();
+  }
+
+  // Names of its layout that another gateway claims too (location, other gateway).
+  std::set<std::pair<std::string, std::string>> contested_locations() const {
+    return claims_ ? claims_->contested() : std::set<std::pair<std::string, std::string>>{};
+  }
 
  private:
   GatewayPublisher() = default;
@@ -121,6 +132,7 @@ class GatewayPublisher final : public bridge::Sink {
   SampleWriters<std::variant<LayoutChangeStatus>> layout_status_;
   bool layout_status_ready_ = false;
   std::unique_ptr<PeerGateways> peers_;
+  std::unique_ptr<LocationClaims> claims_;  // only with a layout
 };
 
 }  // namespace teejet::dds
