@@ -43,17 +43,41 @@ layout::Layout six_places() {
   return *layout::Layout::make(places, layout::Mechanics{0, 90});
 }
 
+// An ECU of the test's own that follows where each valve sits.
+struct PlaceWatcher {
+  PlaceWatcher(int domain, const std::string& name)
+      : peer(domain, name),
+        locations(peer.reader<ValveLocation>()),
+        presence(peer.reader<ValvePresence>()) {}
+  bool ready() const { return locations != nullptr && presence != nullptr; }
+  DdsPeer peer;
+  eprosima::fastdds::dds::DataReader* locations;
+  eprosima::fastdds::dds::DataReader* presence;
+};
+
+// The gateway of `config` with its layout in `file`, written first, started with its valves
+// online. Call it with ASSERT_NO_FATAL_FAILURE.
+void start_with_layout_file(GatewayConfig config, const std::string& file,
+                            const layout::Layout& layout, std::unique_ptr<Gateway>& gateway) {
+  ASSERT_TRUE(layout::save_layout_file(file, layout));
+  config.layout_file = file;
+  ASSERT_TRUE(read_layout_file(config));
+  gateway = make_gateway(config);
+  const auto valves = simulated_valve_count(config.can);
+  ASSERT_TRUE(valves && *valves);
+  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, static_cast<std::size_t>(**valves)));
+}
+
 TEST(LayoutEndToEnd, ALateEcuResolvesEveryPlaceAndSeesWhichAreMissing) {
   auto config = sim_config("gw-layout", 6);
   config.bridge.layout = six_places();
   auto gateway = make_gateway(config);
   ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
 
-  DdsPeer ecu(config.domain, "late-ecu");
-  auto* locations = ecu.reader<ValveLocation>();
-  auto* presence = ecu.reader<ValvePresence>();
-  ASSERT_NE(locations, nullptr);
-  ASSERT_NE(presence, nullptr);
+  PlaceWatcher ecu(config.domain, "late-ecu");
+  ASSERT_TRUE(ecu.ready());
+  auto* locations = ecu.locations;
+  auto* presence = ecu.presence;
   std::map<std::string, ValveLocation> places;
   const auto settled = [&] {
     latest_by(locations, places,
@@ -147,15 +171,12 @@ teejet::testing::Finished valvectl(int domain, std::vector<std::string> argument
 TEST(LayoutEndToEnd, AReplacementIsAssignedOverDdsSavedAndKeptAcrossARestart) {
   teejet::testing::ScratchDir dir;
   const std::string file = dir / "boom.yaml";
-  ASSERT_TRUE(layout::save_layout_file(file, six_places()));
-  auto config = sim_config("gw-layout", 6);
-  config.layout_file = file;
-  ASSERT_TRUE(read_layout_file(config));
-  auto gateway = make_gateway(config);
-  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
-  DdsPeer ecu(config.domain, "boom-ecu");
-  auto* locations = ecu.reader<ValveLocation>();
-  ASSERT_NE(locations, nullptr);
+  const auto config = sim_config("gw-layout", 6);
+  std::unique_ptr<Gateway> gateway;
+  ASSERT_NO_FATAL_FAILURE(start_with_layout_file(config, file, six_places(), gateway));
+  PlaceWatcher ecu(config.domain, "boom-ecu");
+  ASSERT_TRUE(ecu.ready());
+  auto* locations = ecu.locations;
   std::map<std::string, ValveLocation> places;
   const auto place = [&](const std::string& name) {
     latest_by(locations, places,
@@ -223,18 +244,15 @@ TEST(LayoutEndToEnd, AnEcuSeesAReplacementAsItHappensAndAnAssignmentPutsTheNewVa
   for (unsigned i = 1; i <= 6; ++i) {
     places.push_back({.name = "section-0" + std::to_string(i), .order = i, .serial = 100 + i});
   }
-  ASSERT_TRUE(layout::save_layout_file(file, *layout::Layout::make(places)));
   auto config = sim_config("gw-boom", 6);
   config.sim_serials = {101, 102, 103, 104, 105, 106};
-  config.layout_file = file;
-  ASSERT_TRUE(read_layout_file(config));
-  auto gateway = make_gateway(config);
-  ASSERT_NO_FATAL_FAILURE(start_and_wait_online(*gateway, 6));
-  DdsPeer ecu(config.domain, "boom-ecu");
-  auto* locations = ecu.reader<ValveLocation>();
-  auto* presence = ecu.reader<ValvePresence>();
-  ASSERT_NE(locations, nullptr);
-  ASSERT_NE(presence, nullptr);
+  std::unique_ptr<Gateway> gateway;
+  ASSERT_NO_FATAL_FAILURE(
+      start_with_layout_file(config, file, *layout::Layout::make(places), gateway));
+  PlaceWatcher ecu(config.domain, "boom-ecu");
+  ASSERT_TRUE(ecu.ready());
+  auto* locations = ecu.locations;
+  auto* presence = ecu.presence;
   std::map<std::string, ValveLocation> seen;
   std::map<std::uint32_t, ValvePresence> valves;
   const auto place = [&] {
