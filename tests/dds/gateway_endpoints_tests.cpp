@@ -149,40 +149,6 @@ TEST(Participant, FastDdsLogLinesGoToStderrNotStdout) {
   EXPECT_NE(err.find("/nonexistent/profile.xml"), std::string::npos) << err;
 }
 
-// Fast DDS 2.9 starts receiving only after a new participant's first announcement, so a
-// gateway's instant reply to it is often lost. A participant made with announce_to_newcomers
-// announces itself again soon after it meets one: a newcomer sees its announcement change.
-TEST(Participant, OneThatAnnouncesToNewcomersAnnouncesAgainAfterMeetingOne) {
-  auto gateway = Participant::create(
-      {.domain = test_domain(), .name = "announcing", .announce_to_newcomers = true});
-  ASSERT_TRUE(gateway) << gateway.error().reason;
-
-  struct Observer : eprosima::fastdds::dds::DomainParticipantListener {
-    void on_participant_discovery(
-        eprosima::fastdds::dds::DomainParticipant*,
-        eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
-      if (info.info.m_participantName.to_string() != "announcing") return;
-      std::lock_guard lock(mutex);
-      if (!info.info.m_userData.empty()) announced_again = true;
-    }
-    std::mutex mutex;
-    bool announced_again = false;
-  } observer;
-  auto* factory = eprosima::fastdds::dds::DomainParticipantFactory::get_instance();
-  auto* newcomer =
-      factory->create_participant(static_cast<eprosima::fastdds::dds::DomainId_t>(test_domain()),
-                                  factory->get_default_participant_qos(), &observer,
-                                  eprosima::fastdds::dds::StatusMask::none());
-  ASSERT_NE(newcomer, nullptr);
-  EXPECT_TRUE(eventually(
-      [&] {
-        std::lock_guard lock(observer.mutex);
-        return observer.announced_again;
-      },
-      kDeadline));
-  factory->delete_participant(newcomer);
-}
-
 // A --profile whose names the environment's file already took would silently leave that
 // file's settings in force (a secure profile then ran without security): it is refused instead.
 TEST(Participant, AProfileClashingWithTheEnvironmentsIsRefusedNotIgnored) {

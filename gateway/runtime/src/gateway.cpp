@@ -89,8 +89,7 @@ Status Gateway::start() {
        .profile_file = config_.profile_file,
        .name = config_.bridge.gateway_name,
        .on_participant_dropped =
-           [lost = lost_commanders_](const std::string& prefix) { lost->report(prefix); },
-       .announce_to_newcomers = true});
+           [lost = lost_commanders_](const std::string& prefix) { lost->report(prefix); }});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
   std::set<std::string> locations;

@@ -3,8 +3,6 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <algorithm>
-#include <chrono>
-#include <condition_variable>
 #include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -12,10 +10,8 @@
 #include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <filesystem>
 #include <mutex>
-#include <optional>
 #include <set>
 #include <sstream>
-#include <thread>
 #include <vector>
 
 #if TEEJET_DDS_TYPE_OBJECTS
@@ -26,113 +22,21 @@ namespace teejet::dds {
 
 using namespace eprosima::fastdds::dds;
 
-// Sends this participant's announcement again soon after a newcomer appears: once a little
-// later (the newcomer's receivers start right after its first announcement went out) and once
-// more later still (in case the newcomer's process was not scheduled meanwhile). Meetings in
-// between share them. Fast DDS 2.9 announces again when the user data changes: a counter.
-class Participant::Announcer {
- public:
-  static constexpr std::chrono::milliseconds kSoon{20};
-  static constexpr std::chrono::milliseconds kLater{250};
-
-  Announcer() = default;
-  ~Announcer() { stop(); }
-  Announcer(const Announcer&) = delete;
-  Announcer& operator=(const Announcer&) = delete;
-
-  void start(DomainParticipant* participant) {
-    participant_ = participant;
-    thread_ = std::thread([this] { run(); });
-  }
-  void stop() {
-    {
-      std::lock_guard lock(mutex_);
-      stopping_ = true;
-    }
-    wake_.notify_all();
-    if (thread_.joinable()) thread_.join();
-  }
-  // From Fast DDS's discovery thread.
-  void newcomer() {
-    const auto now = Clock::now();
-    {
-      std::lock_guard lock(mutex_);
-      if (!soon_) soon_ = now + kSoon;
-      if (!later_) later_ = now + kLater;
-    }
-    wake_.notify_all();
-  }
-
- private:
-  using Clock = std::chrono::steady_clock;
-
-  void run() {
-    std::unique_lock lock(mutex_);
-    while (!stopping_) {
-      const auto now = Clock::now();
-      bool due = false;
-      for (auto* when : {&soon_, &later_}) {
-        if (*when && **when <= now) {
-          when->reset();
-          due = true;
-        }
-      }
-      if (due) {
-        lock.unlock();
-        announce();
-        lock.lock();
-        continue;
-      }
-      const auto next = std::min(soon_.value_or(Clock::time_point::max()),
-                                 later_.value_or(Clock::time_point::max()));
-      if (next == Clock::time_point::max()) {
-        wake_.wait(lock);
-      } else {
-        wake_.wait_until(lock, next);
-      }
-    }
-  }
-
-  void announce() {
-    DomainParticipantQos qos;
-    if (participant_->get_qos(qos) != ReturnCode_t::RETCODE_OK) return;
-    ++announcements_;
-    std::vector<eprosima::fastrtps::rtps::octet> counter(4);
-    for (std::size_t i = 0; i < counter.size(); ++i) {
-      counter[i] = static_cast<eprosima::fastrtps::rtps::octet>(announcements_ >> (8 * i));
-    }
-    qos.user_data().data_vec(counter);
-    participant_->set_qos(qos);
-  }
-
-  DomainParticipant* participant_ = nullptr;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  bool stopping_ = false;
-  std::optional<Clock::time_point> soon_;
-  std::optional<Clock::time_point> later_;
-  std::uint32_t announcements_ = 0;  // only run() touches it
-};
-
 class Participant::DiscoveryListener final : public DomainParticipantListener {
  public:
-  DiscoveryListener(std::function<void(const std::string&)> on_dropped, Announcer* announcer)
-      : on_dropped_(std::move(on_dropped)), announcer_(announcer) {}
+  explicit DiscoveryListener(std::function<void(const std::string&)> on_dropped)
+      : on_dropped_(std::move(on_dropped)) {}
 
   void on_participant_discovery(
       DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
-    if (info.status == Status::DISCOVERED_PARTICIPANT && announcer_ != nullptr) {
-      announcer_->newcomer();
-    } else if (info.status == Status::DROPPED_PARTICIPANT && on_dropped_) {
+    if (info.status == Status::DROPPED_PARTICIPANT) {
       on_dropped_(participant_text(info.info.m_guid.guidPrefix));
     }
   }
 
  private:
   std::function<void(const std::string&)> on_dropped_;
-  Announcer* announcer_;
 };
 
 namespace {
@@ -246,10 +150,8 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   DomainParticipantQos qos = factory->get_default_participant_qos();
   qos.name(options.name);
   std::unique_ptr<Participant> made(new Participant());
-  if (options.announce_to_newcomers) made->announcer_ = std::make_unique<Announcer>();
-  if (options.on_participant_dropped || made->announcer_) {
-    made->discovery_listener_ =
-        std::make_unique<DiscoveryListener>(options.on_participant_dropped, made->announcer_.get());
+  if (options.on_participant_dropped) {
+    made->discovery_listener_ = std::make_unique<DiscoveryListener>(options.on_participant_dropped);
   }
   // Discovery callbacks ignore the mask; StatusMask::none() keeps the participant listener
   // from taking the readers' data-available callbacks.
@@ -258,13 +160,6 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
                                   made->discovery_listener_.get(), StatusMask::none());
   if (made->participant_ == nullptr) {
     return refused("cannot create a DDS participant in domain " + std::to_string(options.domain));
-  }
-  // Only with simple discovery: there the newcomer needs the reply, and Fast DDS 2.9 asserts
-  // (statistics' OutputTrafficManager) when a Discovery Server client announces again this way.
-  if (made->announcer_ &&
-      made->participant_->get_qos().wire_protocol().builtin.discovery_config.discoveryProtocol ==
-          eprosima::fastrtps::rtps::DiscoveryProtocol_t::SIMPLE) {
-    made->announcer_->start(made->participant_);
   }
   made->publisher_ =
       made->participant_->create_publisher(made->participant_->get_default_publisher_qos());
@@ -277,7 +172,6 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
 }
 
 Participant::~Participant() {
-  if (announcer_) announcer_->stop();
   if (participant_ == nullptr) return;
   participant_->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(participant_);

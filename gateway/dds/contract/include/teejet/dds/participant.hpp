@@ -37,11 +37,6 @@ struct ParticipantOptions {
   // process died or became unreachable. A participant that leaves in order is not reported.
   // Runs on a Fast DDS thread: hand the news to a thread of your own.
   std::function<void(const std::string& guid_prefix)> on_participant_dropped;
-  // Announce this participant again shortly after it meets a new one (a gateway does, for its
-  // clients). Fast DDS 2.9 sends a new participant's first announcement before it starts
-  // receiving, so the instant reply to it is often lost (measured: 7 of 15 late `valvectl list`
-  // waited for the gateway's next periodic announcement, up to the profile's 1 s).
-  bool announce_to_newcomers = false;
 };
 
 // A timeout as Fast DDS's waits take it: below zero is zero, beyond Duration_t's seconds its
@@ -105,8 +100,6 @@ class Participant {
                                                eprosima::fastdds::dds::TypeSupport type);
 
   class DiscoveryListener;
-  class Announcer;
-  std::unique_ptr<Announcer> announcer_;  // outlives the participant: its listener calls it
   std::unique_ptr<DiscoveryListener> discovery_listener_;
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
