@@ -88,8 +88,9 @@ Status Gateway::start() {
       {.domain = config_.domain,
        .profile_file = config_.profile_file,
        .name = config_.bridge.gateway_name,
-       .on_participant_dropped =
-           [lost = lost_commanders_](const std::string& prefix) { lost->report(prefix); }});
+       .on_participant_dropped = [lost = lost_commanders_](const std::string& prefix) {
+         lost->report(prefix);
+       }});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
   std::set<std::string> locations;
