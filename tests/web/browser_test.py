@@ -19,7 +19,10 @@ read-only, and headless Chromium driven by Selenium through chromedriver:
       page loaded as http://attacker.test:PORT/ gets 403, and the WebSocket its script opens
       to the commanding teejet-web to move TJV000004 is refused: the valve stays where it was;
   (h) clickjacking: a page of another local port that frames the dashboard gets no dashboard in
-      its frame (the frame's document has no #cards).
+      its frame (the frame's document has no #cards);
+  (i) the gateway's layout (--layout: section-01..03 hold TJV000001..3, section-04 is empty):
+      the boom strip shows the four places in machine order, section-04 "empty"; the cards are
+      titled by place with the serial beneath, and TJV000004 says it is unassigned.
 
 Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Every wait is a
 condition with a deadline; every failure says what differed.
@@ -88,6 +91,9 @@ CARDS_JS = """
 return [...document.querySelectorAll('#cards .card')].map(c => ({
   serial: c.dataset.serial, online: c.dataset.online,
   position: c.querySelector('.position').textContent,
+  title: c.querySelector('h2').textContent,
+  beneath: c.querySelector('.card-serial').textContent,
+  unassigned: c.dataset.unassigned,
   needle: c.querySelector('.needle').getAttribute('data-degrees'),
   status: c.querySelector('.command-status').textContent,
   state: c.querySelector('.command-status').dataset.state || null,
@@ -111,6 +117,31 @@ def open_page(driver, port):
                ok=lambda seen: seen[0] == "connected" and seen[1] == [(s, "true") for s in SERIALS])
 
 
+BOOM_JS = """
+return [...document.querySelectorAll('#boom-strip .boom-cell')].map(c =>
+  [c.dataset.location, c.dataset.state]);
+"""
+LAYOUT = """locations:
+  - {name: section-01, order: 1, serial: TJV000001}
+  - {name: section-02, order: 2, serial: TJV000002}
+  - {name: section-03, order: 3, serial: TJV000003}
+  - {name: section-04, order: 4}
+"""
+
+
+def boom_and_titles(driver):
+    boom = eventually(lambda: driver.execute_script(BOOM_JS), 10,
+                      "the boom strip with section-01..04, section-04 empty",
+                      ok=lambda b: [p for p, _ in b] == ["section-01", "section-02", "section-03",
+                                                         "section-04"]
+                      and b[3][1] == "empty" and all(s != "missing" for _, s in b))
+    titled = [(c["title"], c["beneath"], c["unassigned"]) for c in cards(driver)]
+    check(titled == [("section-01", "TJV000001", "false"), ("section-02", "TJV000002", "false"),
+                     ("section-03", "TJV000003", "false"), ("TJV000004", "unassigned", "true")],
+          f"card titles (title, beneath, unassigned): {titled}")
+    print(f"(i) boom strip {boom}; cards titled by place, TJV000004 unassigned")
+
+
 def degrees(text):
     try:
         return float(text.rstrip("°"))
@@ -124,6 +155,7 @@ def commanding_page(driver, artifacts, screenshot):
     mode = driver.find_element(By.ID, "mode").text
     check(mode == "commands allowed", f"mode badge: {mode!r}, not 'commands allowed'")
     print("(a) 4 cards TJV000001..TJV000004 online")
+    boom_and_titles(driver)
 
     target = driver.find_element(By.CSS_SELECTOR, '.card[data-serial="TJV000002"]')
     before = card(driver, "TJV000002")
@@ -396,7 +428,10 @@ def main():
 
     work = tempfile.mkdtemp(prefix="teejet-web-browser-")
     logs = {name: os.path.join(work, f"{name}.log") for name in ("gateway", "web", "web-ro", "web-token")}
-    processes = [subprocess.Popen([args.gateway, "--can", "sim:4"],
+    layout = os.path.join(work, "boom.yaml")
+    with open(layout, "w") as text:
+        text.write(LAYOUT)
+    processes = [subprocess.Popen([args.gateway, "--can", "sim:4", "--layout", layout],
                                   stdout=open(logs["gateway"], "w"), stderr=subprocess.STDOUT)]
     commanding = subprocess.Popen([args.web, "--listen", f"127.0.0.1:{COMMANDS_PORT}",
                                    "--allow-commands"],

@@ -159,5 +159,44 @@ TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
   EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 80), std::nullopt);
 }
 
+TEST(WebUpdates, EveryPlaceIsInTheSnapshotInMachineOrderAndAChangedOneInTheNextTick) {
+  client::ValveTable table = three_valves();
+  const auto place = [](const char* name, std::uint16_t order, std::uint32_t serial,
+                        LocationState state) {
+    ValveLocation sample;
+    sample.location(name);
+    sample.gateway("gw");
+    sample.order(order);
+    sample.role(order == 1 ? ROLE_MASTER : ROLE_SECTION);
+    sample.assigned(serial != 0);
+    sample.serial(serial);
+    sample.state(state);
+    sample.mechanics_known(true);
+    sample.closed_degrees(0.0f);
+    sample.opened_degrees(order == 1 ? 360.0f : 90.0f);
+    return sample;
+  };
+  table.on_location(place("section-01", 2, 2, LOCATION_OK));
+  table.on_location(place("left-master", 1, 1, LOCATION_OK));
+  table.on_location(place("section-02", 3, 0, LOCATION_EMPTY));
+  UpdateBatcher batcher;
+  const json snapshot = batcher.snapshot(dashboard_frame(table, {}));
+  ASSERT_EQ(snapshot["places"].size(), 3u);
+  EXPECT_EQ(snapshot["places"][0].dump(),
+            R"({"closed_deg":0.0,"gateway":"gw","location":"left-master","opened_deg":360.0,)"
+            R"("order":1,"role":"master","serial":"TJV000001","state":"ok"})");
+  EXPECT_EQ(snapshot["places"][1]["location"], "section-01");
+  EXPECT_EQ(snapshot["places"][2]["serial"], nullptr);
+  EXPECT_EQ(snapshot["places"][2]["state"], "empty");
+  EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 40), std::nullopt);
+
+  table.on_location(place("section-02", 3, 3, LOCATION_OK));  // a valve put there
+  const auto update = batcher.tick(dashboard_frame(table, {}), 80);
+  ASSERT_TRUE(update);
+  ASSERT_EQ((*update)["places"].size(), 1u);
+  EXPECT_EQ((*update)["places"][0]["serial"], "TJV000003");
+  EXPECT_EQ((*update)["places"][0]["state"], "ok");
+}
+
 }  // namespace
 }  // namespace teejet::web

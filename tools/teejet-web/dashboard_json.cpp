@@ -59,18 +59,24 @@ DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& t
   for (const client::GatewaySummary& gateway : table.gateways()) {
     frame.gateways.emplace_back(gateway.name, gateway_json(gateway));
   }
+  for (const client::LocationRow& place : table.locations()) {
+    frame.places.emplace_back(place.gateway + "/" + place.name, client::to_json(place));
+  }
   return frame;
 }
 
 nlohmann::json UpdateBatcher::snapshot(const DashboardFrame& frame) {
   sent_valves_.clear();
   sent_gateways_.clear();
+  sent_places_.clear();
   statuses_.clear();
   nlohmann::json valves = nlohmann::json::array();
   for (const auto& [serial, json] : frame.valves) valves.push_back(sent_valves_[serial] = json);
   nlohmann::json gateways = nlohmann::json::array();
   for (const auto& [name, json] : frame.gateways) gateways.push_back(sent_gateways_[name] = json);
-  return {{"type", "snapshot"}, {"valves", valves}, {"gateways", gateways}};
+  nlohmann::json places = nlohmann::json::array();
+  for (const auto& [key, json] : frame.places) places.push_back(sent_places_[key] = json);
+  return {{"type", "snapshot"}, {"valves", valves}, {"gateways", gateways}, {"places", places}};
 }
 
 void UpdateBatcher::add_status(const CommandStatus& status) {
@@ -89,11 +95,19 @@ std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
     nlohmann::json& sent = sent_gateways_[name];
     if (json != sent) gateways.push_back(sent = json);
   }
-  if (valves.empty() && gateways.empty() && statuses_.empty()) return std::nullopt;
+  nlohmann::json places = nlohmann::json::array();
+  for (const auto& [key, json] : frame.places) {
+    nlohmann::json& sent = sent_places_[key];
+    if (json != sent) places.push_back(sent = json);
+  }
+  if (valves.empty() && gateways.empty() && places.empty() && statuses_.empty()) {
+    return std::nullopt;
+  }
   nlohmann::json statuses(std::move(statuses_));
   statuses_.clear();
-  return nlohmann::json{{"type", "update"}, {"tick", ++ticks_},     {"stamp_ms", stamp_ms},
-                        {"valves", valves}, {"gateways", gateways}, {"statuses", statuses}};
+  return nlohmann::json{{"type", "update"},    {"tick", ++ticks_},     {"stamp_ms", stamp_ms},
+                        {"valves", valves},    {"gateways", gateways}, {"places", places},
+                        {"statuses", statuses}};
 }
 
 }  // namespace teejet::web

@@ -35,6 +35,9 @@ nlohmann::json gateway_json(const client::GatewaySummary& gateway);
 struct DashboardFrame {
   std::vector<std::pair<std::uint32_t, nlohmann::json>> valves;
   std::vector<std::pair<std::string, nlohmann::json>> gateways;
+  // Every place of every gateway's layout (client::to_json(LocationRow)), keyed
+  // "gateway/location", in machine order.
+  std::vector<std::pair<std::string, nlohmann::json>> places;
 };
 DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets);
 
@@ -44,20 +47,22 @@ DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& t
 // its latest state. Command statuses are events, not state: every one is kept until the tick.
 class UpdateBatcher {
  public:
-  // The first message of a page: {"type":"snapshot","valves":[...],"gateways":[...]}. What it
-  // holds counts as sent, so the next tick only carries changes.
+  // The first message of a page: {"type":"snapshot","valves":[...],"gateways":[...],
+  // "places":[...]}. What it holds counts as sent, so the next tick only carries changes.
   nlohmann::json snapshot(const DashboardFrame& frame);
 
   void add_status(const CommandStatus& status);
 
   // {"type":"update","tick":N,"stamp_ms":..,"valves":[changed],"gateways":[changed],
-  //  "statuses":[since the last tick]}, or nullopt when nothing changed (nothing to send).
+  //  "places":[changed],"statuses":[since the last tick]}, or nullopt when nothing changed
+  //  (nothing to send).
   // `stamp_ms` is the caller's clock, so that the page can plot against it.
   std::optional<nlohmann::json> tick(const DashboardFrame& frame, std::uint64_t stamp_ms);
 
  private:
   std::map<std::uint32_t, nlohmann::json> sent_valves_;
   std::map<std::string, nlohmann::json> sent_gateways_;
+  std::map<std::string, nlohmann::json> sent_places_;
   std::vector<nlohmann::json> statuses_;
   std::uint64_t ticks_ = 0;
 };

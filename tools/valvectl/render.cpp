@@ -172,24 +172,13 @@ std::string render_layout(const ValveTable& table) {
 
 nlohmann::json layout_json(const ValveTable& table) {
   nlohmann::json places = nlohmann::json::array();
-  const auto optional = [](const auto& value) -> nlohmann::json {
-    if (!value) return nullptr;
-    return *value;
-  };
   for (const LocationRow& place : table.locations()) {
     const auto valve = valve_at(table, place);
-    places.push_back({
-        {"order", place.order},
-        {"location", place.name},
-        {"role", dds::to_string(place.role)},
-        {"serial", place.serial ? nlohmann::json(codec::format_serial(*place.serial)) : nullptr},
-        {"state", place.gateway_lost ? "unknown" : dds::to_string(place.state)},
-        {"position", valve ? optional(valve->position_degrees()) : nullptr},
-        {"address", valve ? nlohmann::json(valve->address) : nullptr},
-        {"gateway", place.gateway},
-        {"closed_deg", optional(place.closed_degrees)},
-        {"opened_deg", optional(place.opened_degrees)},
-    });
+    const auto position = valve ? valve->position_degrees() : std::nullopt;
+    nlohmann::json row = to_json(place);
+    row["position"] = position ? nlohmann::json(*position) : nullptr;
+    row["address"] = valve ? nlohmann::json(valve->address) : nullptr;
+    places.push_back(std::move(row));
   }
   nlohmann::json serials = nlohmann::json::array();
   for (const ValveRow& row : unassigned(table)) serials.push_back(codec::format_serial(row.serial));

@@ -11,6 +11,7 @@
 
   const valves = new Map();    // serial -> {data, card, history: [[t, json]], color}
   const gateways = new Map();  // name -> element
+  const places = new Map();    // "gateway/location" -> place JSON (docs/web.md)
   const sentCommands = new Map();  // request id -> serials it was for (until answered)
   let policy = null;           // {allowed, token_required} from the snapshot
   // What the valves tell and what commands take, from the codec's table (docs/web.md):
@@ -115,9 +116,11 @@
       recent.push([now, message.valves.length]);
       updateRates(now);
       serverOffsetMs = message.stamp_ms - Date.now();
+      for (const p of message.places || []) showPlace(p);
       for (const v of message.valves) showValve(v, message.stamp_ms);
       for (const g of message.gateways) showGateway(g);
       for (const s of message.statuses) showStatus(s);
+      if ((message.places || []).length || message.valves.length) paintBoom();
     } else if (message.type === "sent") {
       onSent(message);
     } else if (message.type === "refused") {
@@ -149,8 +152,56 @@
     $("mode").textContent = policy.allowed
       ? (policy.token_required ? "commands allowed (token)" : "commands allowed") : "read-only";
     const stamp = Date.now();
+    places.clear();
+    for (const p of message.places || []) showPlace(p);
     for (const v of message.valves) showValve(v, stamp);
     for (const g of message.gateways) showGateway(g);
+    paintBoom();
+  }
+
+  // ---- the boom: every place in machine order ------------------------------------------------
+
+  function showPlace(place) {
+    places.set(`${place.gateway}/${place.location}`, place);
+  }
+
+  // The place a valve sits at, if any.
+  function placeOf(data) {
+    return data.location ? places.get(`${data.gateway}/${data.location}`) : undefined;
+  }
+
+  // What a glance at the boom should tell: open, closed, moving, error, missing, empty.
+  function boomState(place) {
+    if (place.state !== "ok") return place.state;
+    const valve = valves.get(place.serial);
+    if (!valve) return "ok";
+    const d = valve.data;
+    if ((d.errors || []).length > 0) return "error";
+    if (d.target !== null && d.target !== undefined) return "moving";
+    if (d.position === null) return "ok";
+    const closed = place.closed_deg ?? 0, opened = place.opened_deg ?? 90;
+    if (opened < 360 && d.position >= opened - 1) return "open";
+    if (d.position <= closed + 1) return "closed";
+    return "open";
+  }
+
+  let paintedBoom = "";  // what the strip shows, to leave the DOM alone when nothing changed
+  function paintBoom() {
+    const ordered = [...places.values()].sort((a, b) =>
+      a.order - b.order || a.gateway.localeCompare(b.gateway));
+    const cells = ordered.map((place) => [place, boomState(place)]);
+    const shown = JSON.stringify(cells.map(([p, state]) => [p.gateway, p.location, p.serial, state]));
+    if (shown !== paintedBoom) {
+      paintedBoom = shown;
+      $("boom").hidden = cells.length === 0;
+      $("boom-strip").replaceChildren(...cells.map(([place, state]) =>
+        el("div", { class: "boom-cell", role: "listitem", "data-state": state,
+                    "data-location": place.location,
+                    title: `${place.location} (${place.gateway}): ${place.serial || "no valve"}, ${state}` },
+           el("span", { class: "boom-name" }, place.location),
+           el("span", { class: "boom-state" }, state))));
+    }
+    for (const valve of valves.values()) titleCard(valve);
   }
 
   // ---- valves --------------------------------------------------------------------------------
@@ -167,14 +218,39 @@
     valve.history.push([stampMs, data]);
     while (valve.history.length && valve.history[0][0] < stampMs - HISTORY_MS) valve.history.shift();
     fillCard(valve);
+    titleCard(valve);
     if (valve.card.querySelector(".plot-pick").checked) requestPaint();
   }
 
-  // Sorted by serial: a new valve takes its place among the others.
+  // In machine order (the order of the place each sits at), then the valves in no place, by
+  // serial: a new valve takes its place among the others.
+  function sortKey(card) {
+    return [Number(card.dataset.order || 1e6), card.dataset.serial];
+  }
   function placeCard(card) {
     const cards = $("cards");
-    const after = [...cards.children].find((c) => c.dataset.serial > card.dataset.serial);
+    const [order, serial] = sortKey(card);
+    const after = [...cards.children].find((c) => {
+      const [o, s] = sortKey(c);
+      return o > order || (o === order && s > serial);
+    });
     cards.insertBefore(card, after || null);
+  }
+
+  // A card is titled by its valve's place, with the serial beneath; a valve online in no place
+  // of a layout says so.
+  function titleCard(valve) {
+    const card = valve.card, d = valve.data, place = placeOf(d);
+    const title = place ? place.location : d.serial;
+    const order = place ? String(place.order) : "";
+    const unassigned = !place && places.size > 0 && d.online;
+    card.querySelector("h2").textContent = title;
+    card.querySelector(".card-serial").textContent = place ? d.serial : unassigned ? "unassigned" : "";
+    card.dataset.unassigned = String(unassigned);
+    if (card.dataset.order !== order) {
+      card.dataset.order = order;
+      placeCard(card);
+    }
   }
 
   function buildCard(serial, valve) {
@@ -203,7 +279,8 @@
     }
     readings.append(el("dt", {}, "target"), el("dd", { class: "target" }, dash));
     const card = el("article", { class: "card", "data-serial": serial },
-      el("header", {}, el("h2", {}, serial), el("label", { class: "hint" }, pick, " plot")),
+      el("header", {}, el("div", {}, el("h2", {}, serial), el("div", { class: "card-serial" })),
+         el("label", { class: "hint" }, pick, " plot")),
       el("div", { class: "meta" }),
       el("div", { class: "dial-row" }, dial,
          el("div", {}, el("div", { class: "position" }, dash), readings)),
@@ -212,6 +289,12 @@
     if (policy.allowed) card.append(buildCommands(serial));
     card.append(el("div", { class: "command-status" }));
     return card;
+  }
+
+  // As the protocol sheet writes addresses: 0xD8.
+  function hexAddress(address) {
+    return typeof address === "number"
+      ? `0x${address.toString(16).toUpperCase().padStart(2, "0")}` : dash;
   }
 
   function fillCard(valve) {
@@ -225,7 +308,7 @@
     const others = d.also_reported_by || [];
     card.dataset.contested = String(others.length > 0);
     card.querySelector(".meta").replaceChildren(
-      `address ${d.address} · gateway ${d.gateway || dash} · `, online,
+      `address ${hexAddress(d.address)} · gateway ${d.gateway || dash} · `, online,
       d.boot_mode ? " · boot mode" : "",
       ...(others.length > 0
         ? [" · ", el("span", { class: "contested" },

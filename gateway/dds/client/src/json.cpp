@@ -65,6 +65,23 @@ nlohmann::json to_json(const std::vector<ValveRow>& rows) {
   return array;
 }
 
+nlohmann::json to_json(const LocationRow& place) {
+  const auto optional = [](const std::optional<double>& value) -> nlohmann::json {
+    if (!value) return nullptr;
+    return *value;
+  };
+  return {
+      {"order", place.order},
+      {"location", place.name},
+      {"role", dds::to_string(place.role)},
+      {"serial", place.serial ? nlohmann::json(codec::format_serial(*place.serial)) : nullptr},
+      {"state", place.gateway_lost ? "unknown" : dds::to_string(place.state)},
+      {"gateway", place.gateway},
+      {"closed_deg", optional(place.closed_degrees)},
+      {"opened_deg", optional(place.opened_degrees)},
+  };
+}
+
 nlohmann::json status_json(const CommandStatus& status) {
   return {
       {"event", "status"},

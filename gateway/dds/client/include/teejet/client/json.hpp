@@ -21,6 +21,11 @@ namespace teejet::client {
 nlohmann::json to_json(const ValveRow& row);
 nlohmann::json to_json(const std::vector<ValveRow>& rows);
 
+// {"order":1,"location":"left-master","role":"master","serial":"TJV000101","state":"ok",
+//  "gateway":"...","closed_deg":0.0,"opened_deg":360.0}: a place of a gateway's layout; state
+// "unknown" once its gateway vanished; missing values are null.
+nlohmann::json to_json(const LocationRow& place);
+
 // {"event":"status","serial":"TJV000002","command_id":17,"origin":"...","kind":"target_degrees",
 //  "state":"accepted","reason":"","stamp_ns":...}
 nlohmann::json status_json(const CommandStatus& status);
