@@ -155,48 +155,52 @@ Sample location(const LocationValues& v) {
                   {"opened_degrees", v.opened}});
 }
 
-Sample layout_change(const std::string& location, const std::string& gateway, std::uint32_t id,
-                     const std::string& origin, teejet::LayoutChangeKind kind, std::uint32_t serial,
-                     bool move) {
-  teejet::LayoutChange s;
-  s.location(location);
-  s.gateway(gateway);
-  s.change_id(id);
-  s.origin(origin);
-  s.kind(kind);
-  s.serial(serial);
-  s.move(move);
-  return make(s, {{"location", location},
-                  {"gateway", gateway},
-                  {"change_id", id},
-                  {"origin", origin},
-                  {"kind", static_cast<std::uint32_t>(kind)},
-                  {"serial", serial},
-                  {"move", move}});
+// What a layout change and its status share.
+struct LayoutKey {
+  std::string location;
+  std::string gateway;
+  std::uint32_t id;
+  std::string origin;
+  teejet::LayoutChangeKind kind;
+  std::uint32_t serial;
+};
+
+// Sets the shared fields on `s`; returns them as the reader must show them.
+template <class T>
+json layout_fields(T& s, const LayoutKey& k) {
+  s.location(k.location);
+  s.gateway(k.gateway);
+  s.change_id(k.id);
+  s.origin(k.origin);
+  s.kind(k.kind);
+  s.serial(k.serial);
+  return {{"location", k.location},
+          {"gateway", k.gateway},
+          {"change_id", k.id},
+          {"origin", k.origin},
+          {"kind", static_cast<std::uint32_t>(k.kind)},
+          {"serial", k.serial}};
 }
 
-Sample layout_status(const std::string& location, const std::string& gateway, std::uint32_t id,
-                     const std::string& origin, teejet::LayoutChangeKind kind, std::uint32_t serial,
-                     teejet::LayoutChangeState state, const std::string& reason, std::uint64_t ns) {
+Sample layout_change(const LayoutKey& key, bool move) {
+  teejet::LayoutChange s;
+  json data = layout_fields(s, key);
+  s.move(move);
+  data["move"] = move;
+  return make(s, std::move(data));
+}
+
+Sample layout_status(const LayoutKey& key, teejet::LayoutChangeState state,
+                     const std::string& reason, std::uint64_t ns) {
   teejet::LayoutChangeStatus s;
-  s.location(location);
-  s.gateway(gateway);
-  s.change_id(id);
-  s.origin(origin);
-  s.kind(kind);
-  s.serial(serial);
+  json data = layout_fields(s, key);
   s.state(state);
   s.reason(reason);
   s.stamp_ns(ns);
-  return make(s, {{"location", location},
-                  {"gateway", gateway},
-                  {"change_id", id},
-                  {"origin", origin},
-                  {"kind", static_cast<std::uint32_t>(kind)},
-                  {"serial", serial},
-                  {"state", static_cast<std::uint32_t>(state)},
-                  {"reason", reason},
-                  {"stamp_ns", u64(ns)}});
+  data["state"] = static_cast<std::uint32_t>(state);
+  data["reason"] = reason;
+  data["stamp_ns"] = u64(ns);
+  return make(s, std::move(data));
 }
 
 Sample version(std::uint32_t serial, teejet::SoftwareVersion app, teejet::SoftwareVersion boot,
@@ -557,16 +561,17 @@ std::vector<ChannelSpec> known_channels() {
        status(kC, 4, "x", COMMAND_STOP, COMMAND_SUPERSEDED, "", kBase + 34)});
   // Both kinds, a move, the longest names, both states.
   add(topics::kLayoutChange, "LayoutChange",
-      {layout_change("left-master", "boom-left", 7, "valvectl", LAYOUT_ASSIGN, kC, false),
-       layout_change("section-32-chars-abcdefghijklmno", k64, 4294967295U, k64, LAYOUT_ASSIGN,
-                     0xFFFFFF, true),
-       layout_change("section-02", "boom-left", 8, "", LAYOUT_UNASSIGN, 0, false)});
+      {layout_change({"left-master", "boom-left", 7, "valvectl", LAYOUT_ASSIGN, kC}, false),
+       layout_change(
+           {"section-32-chars-abcdefghijklmno", k64, 4294967295U, k64, LAYOUT_ASSIGN, 0xFFFFFF},
+           true),
+       layout_change({"section-02", "boom-left", 8, "", LAYOUT_UNASSIGN, 0}, false)});
   add(topics::kLayoutChangeStatus, "LayoutChangeStatus",
-      {layout_status("left-master", "boom-left", 7, "valvectl", LAYOUT_ASSIGN, kC,
+      {layout_status({"left-master", "boom-left", 7, "valvectl", LAYOUT_ASSIGN, kC},
                      LAYOUT_CHANGE_APPLIED, "TJV000099 left it", kBase + 36),
-       layout_status("section-32-chars-abcdefghijklmno", k64, 4294967295U, k64, LAYOUT_ASSIGN, 0,
+       layout_status({"section-32-chars-abcdefghijklmno", k64, 4294967295U, k64, LAYOUT_ASSIGN, 0},
                      LAYOUT_CHANGE_REJECTED, long_reason, kAbove53 + 36),
-       layout_status("section-02", "boom-left", 8, "", LAYOUT_UNASSIGN, 0, LAYOUT_CHANGE_APPLIED,
+       layout_status({"section-02", "boom-left", 8, "", LAYOUT_UNASSIGN, 0}, LAYOUT_CHANGE_APPLIED,
                      "", kBase + 37)});
   add(topics::kGatewayStatus, "GatewayStatus",
       {gateway_status({"boom-left",
