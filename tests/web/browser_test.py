@@ -22,7 +22,9 @@ read-only, and headless Chromium driven by Selenium through chromedriver:
       its frame (the frame's document has no #cards);
   (i) the gateway's layout (--layout: section-01..03 hold TJV000001..3, section-04 is empty):
       the boom strip shows the four places in machine order, section-04 "empty"; the cards are
-      titled by place with the serial beneath, and TJV000004 says it is unassigned.
+      titled by place with the serial beneath, and TJV000004 says it is unassigned;
+  (j) Identify on TJV000003's card jogs it out and back twice: its status line ends "identified,
+      back at 0.0°" and the dial is back at 0.
 
 Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Every wait is a
 condition with a deadline; every failure says what differed.
@@ -206,7 +208,21 @@ def commanding_page(driver, artifacts, screenshot):
     if screenshot:
         shutil.copyfile(path, screenshot)
         print(f"(d) copied to {screenshot}")
+    identify(driver)
     return moved
+
+
+def identify(driver):
+    start = card(driver, "TJV000003")["position"]
+    driver.find_element(By.CSS_SELECTOR, '.card[data-serial="TJV000003"] .identify').click()
+    done = eventually(lambda: card(driver, "TJV000003"), 40,
+                      "the end of TJV000003's identify in its status line",
+                      ok=lambda c: c["final"] == "true")
+    check(done["state"] == "identified" and done["status"] == f"identified, back at {start}",
+          f"TJV000003's status line after identify: {done['status']!r} (state {done['state']})")
+    back = eventually(lambda: card(driver, "TJV000003"), 10, f"TJV000003's dial back at {start}",
+                      ok=lambda c: c["position"] == start)
+    print(f"(j) identify: {done['status']!r}, dial {back['position']}")
 
 
 def read_only_page(driver):

@@ -7,12 +7,17 @@
   const HISTORY_MS = 5 * 60 * 1000 + 10000;  // the longest plot window, and a little
   const COLORS = ["#1565c0", "#c62828", "#2e7d32", "#6a1b9a", "#ef6c00", "#00838f", "#5d4037",
                   "#ad1457", "#827717", "#37474f"];
-  const FINAL = new Set(["completed", "rejected", "timed_out", "superseded", "refused", "error"]);
+  const FINAL = new Set(["completed", "rejected", "timed_out", "superseded", "refused", "error",
+                         "identified"]);
 
   const valves = new Map();    // serial -> {data, card, history: [[t, json]], color}
   const gateways = new Map();  // name -> element
   const places = new Map();    // "gateway/location" -> place JSON (docs/web.md)
   const sentCommands = new Map();  // request id -> serials it was for (until answered)
+  // Valves being identified: serial -> {steps: [[degrees, direction], ...], at, requestId,
+  // commandId, start}. Each step is a move sent once the one before it completed.
+  const identifying = new Map();
+  const JOG_DEGREES = 10;
   let policy = null;           // {allowed, token_required} from the snapshot
   // What the valves tell and what commands take, from the codec's table (docs/web.md):
   // {commands: {move: {degrees: {min, max, step, unit}, ...}, request: {telemetry: [...]}},
@@ -406,13 +411,66 @@
       fieldInput("jog", "speed_percent", "jog-speed", 50, "speed %"), "%",
       wordOptions("jog", "direction", "jog-direction", "open"),
       el("button", { class: "cmd jog-send", type: "submit" }, "Jog"));
+    const identify = el("button", { class: "cmd identify", type: "button",
+                                     title: "two short jogs out and back, ending where it started, "
+                                            + "so that the person at the boom sees which valve it is" },
+                        "Identify");
+    identify.addEventListener("click", () => startIdentify(serial));
     const request = form("request", (f) => {
       const telemetry = value(f, "request-telemetry");
       send({ command: "request", serial, telemetry,
              resend_tenths: 0 }, serial);
     }, "request", options("request-telemetry", (protocol.commands.request || {}).telemetry || []),
       el("button", { class: "cmd request-send", type: "submit" }, "Request"));
-    return el("div", { class: "commands cmd" }, move, el("div", {}, stop, " ", clear), jog, request);
+    return el("div", { class: "commands cmd" }, move,
+              el("div", {}, stop, " ", clear, " ", identify), jog, request);
+  }
+
+  // As valvectl identify does: two jogs of JOG_DEGREES out and back with Target Degrees, within
+  // the mechanics of the valve's place (else 0..359.9), each followed to completed.
+  function startIdentify(serial) {
+    const valve = valves.get(serial);
+    if (!valve || valve.data.position === null) {
+      setStatus(serial, "error", "identify: the valve's position is not known yet");
+      return;
+    }
+    const start = valve.data.position, place = placeOf(valve.data);
+    const full = !place || place.opened_deg === null || place.opened_deg >= 360;
+    const low = full ? 0 : place.closed_deg, high = full ? 359.9 : place.opened_deg;
+    const opens = start + JOG_DEGREES <= high || start - JOG_DEGREES < low;
+    const out = Math.min(high, Math.max(low, start + (opens ? JOG_DEGREES : -JOG_DEGREES)));
+    const there = [out, opens ? "open" : "close"], back = [start, opens ? "close" : "open"];
+    identifying.set(serial, { steps: [there, back, there, back], at: 0, start });
+    identifyStep(serial);
+  }
+
+  function identifyStep(serial) {
+    const job = identifying.get(serial);
+    if (job.at === job.steps.length) {
+      identifying.delete(serial);
+      setStatus(serial, "identified", `identified, back at ${fixed(job.start, 1, "°")}`);
+      return;
+    }
+    const [degrees, direction] = job.steps[job.at];
+    job.requestId = nextId;
+    job.commandId = null;
+    send({ command: "move", serial, degrees: Math.round(degrees * 10) / 10, speed_percent: 100,
+           direction }, serial);
+  }
+
+  // A final status of the identify's current move: the next step, or the end of it.
+  function identifyHeard(status) {
+    const job = identifying.get(status.serial);
+    if (!job || job.commandId !== status.command_id || !FINAL.has(status.state)) return false;
+    if (status.state !== "completed") {
+      identifying.delete(status.serial);
+      setStatus(status.serial, status.state, `identify stopped: move ${status.state}`
+                + (status.reason ? ` (${status.reason})` : ""));
+      return true;
+    }
+    job.at += 1;
+    identifyStep(status.serial);
+    return true;
   }
 
   function send(command, serial) {
@@ -432,6 +490,10 @@
   function onSent(message) {
     sentCommands.delete(message.id);
     for (const c of message.commands) {
+      const job = identifying.get(c.serial);
+      if (job && job.requestId === message.id) {
+        if (c.error) identifying.delete(c.serial); else job.commandId = c.command_id;
+      }
       if (c.error) setStatus(c.serial, "error", `not sent: ${c.error}`);
       else setStatus(c.serial, "sent", `#${c.command_id}: sent, waiting for the gateway`);
     }
@@ -440,11 +502,13 @@
   function onRefused(message) {
     const serial = sentCommands.get(message.id);
     sentCommands.delete(message.id);
+    if (serial && identifying.get(serial)?.requestId === message.id) identifying.delete(serial);
     if (serial) setStatus(serial, "refused", `refused: ${message.reason}`);
     notice(`refused: ${message.reason}`);
   }
 
   function showStatus(status) {
+    if (identifyHeard(status)) return;
     const reason = status.reason ? ` (${status.reason})` : "";
     setStatus(status.serial, status.state,
               `${status.kind} #${status.command_id}: ${status.state}${reason}`);
