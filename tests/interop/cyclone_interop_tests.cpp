@@ -187,7 +187,12 @@ TEST_F(CycloneInterop, AnEcuResolvesALocationToItsSerialAndCommandsIt) {
   EXPECT_EQ(states_of(move), kDone);
   const auto presence = ecu_.state_reader(teejet_ValvePresence_desc, "teejet/valve/presence");
   std::map<std::uint32_t, teejet_ValvePresence> seen;
-  ASSERT_TRUE(eventually([&] { return latest(presence, seen).contains(4); }, kDiscovery));
+  ASSERT_TRUE(eventually(
+      [&] {
+        latest(presence, seen);
+        return seen.contains(4) && seen.contains(2);
+      },
+      kDiscovery));
   EXPECT_STREQ(seen[4].location, "left-master");
   EXPECT_STREQ(seen[2].location, "");
 }

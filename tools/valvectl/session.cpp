@@ -173,6 +173,31 @@ class Session {
     return kExitOk;
   }
 
+  // A client of `Request`s whose writer and status reader every gateway in `owners` has matched
+  // (and `readers` command readers in all), or the exit status that says why not; nothing is
+  // sent then. `unmatched(client)` says which owners did not subscribe.
+  template <class Request, class Unmatched>
+  std::variant<std::unique_ptr<RequestClient<Request>>, int> connected_client(
+      const std::set<std::string>& owners, std::size_t readers, Unmatched unmatched) {
+    auto made = RequestClient<Request>::create(*participant_, default_origin("valvectl"));
+    if (!made) {
+      complain(made.error().reason);
+      return kExitFailure;
+    }
+    const auto connected =
+        (*made)->connect(owners, readers, after_timeout(), terminal_.interrupted);
+    if (!connected) {
+      complain(connected.error().reason);
+      return kExitFailure;
+    }
+    if (!*connected) {
+      if (terminal_.interrupted) return kExitInterrupted;
+      complain(unmatched(**made));
+      return kExitNotFound;
+    }
+    return std::move(*made);
+  }
+
   // The one place called `name` among the gateways' layouts, or the exit status that says why
   // there is none: no gateway has it, or two claim it (nothing is sent to either).
   std::variant<LocationRow, int> find_place(const std::string& name, Deadline until) {
@@ -208,28 +233,16 @@ class Session {
   // assign and unassign: to the one gateway whose layout holds the place.
   int layout_change() {
     const LayoutChangeRequest& request = invocation_.layout_change;
-    const Deadline until = after_timeout();
-    auto found = find_place(request.location, until);
+    auto found = find_place(request.location, after_timeout());
     if (const int* exit_code = std::get_if<int>(&found)) return *exit_code;
     const LocationRow& place = std::get<LocationRow>(found);
-    auto made = LayoutClient::create(*participant_, default_origin("valvectl"));
-    if (!made) {
-      complain(made.error().reason);
-      return kExitFailure;
-    }
-    LayoutClient& client = **made;
-    const auto connected = client.connect({place.participant}, 0, until, terminal_.interrupted);
-    if (!connected) {
-      complain(connected.error().reason);
-      return kExitFailure;
-    }
-    if (!*connected) {
-      if (terminal_.interrupted) return kExitInterrupted;
-      complain("gateway " + place.gateway + " did not subscribe to layout changes within " +
-               seconds_text(invocation_.global.timeout) + " on " + domain_text() +
-               "; nothing was sent");
-      return kExitNotFound;
-    }
+    auto made = connected_client<LayoutChange>({place.participant}, 0, [&](const LayoutClient&) {
+      return "gateway " + place.gateway + " did not subscribe to layout changes within " +
+             seconds_text(invocation_.global.timeout) + " on " + domain_text() +
+             "; nothing was sent";
+    });
+    if (const int* exit_code = std::get_if<int>(&made)) return *exit_code;
+    LayoutClient& client = *std::get<std::unique_ptr<LayoutClient>>(made);
     LayoutChange change;
     change.location(request.location);
     change.gateway(place.gateway);
@@ -333,21 +346,12 @@ class Session {
     const bool out_opens = start + kJogDegrees <= high || start - kJogDegrees < low;
     const double out = std::clamp(start + (out_opens ? kJogDegrees : -kJogDegrees), low, high);
 
-    auto made = CommandClient::create(*participant_, default_origin("valvectl"));
-    if (!made) {
-      complain(made.error().reason);
-      return kExitFailure;
-    }
-    CommandClient& client = **made;
-    const auto connected =
-        client.connect({row->participant}, 0, after_timeout(), terminal_.interrupted);
-    if (!connected || !*connected) {
-      if (terminal_.interrupted) return kExitInterrupted;
-      complain(connected ? "gateway " + row->gateway + " did not subscribe to commands within " +
-                               seconds_text(invocation_.global.timeout) + "; it was not moved"
-                         : connected.error().reason);
-      return connected ? kExitNotFound : kExitFailure;
-    }
+    auto made = connected_client<ValveCommand>({row->participant}, 0, [&](const CommandClient&) {
+      return "gateway " + row->gateway + " did not subscribe to commands within " +
+             seconds_text(invocation_.global.timeout) + "; it was not moved";
+    });
+    if (const int* exit_code = std::get_if<int>(&made)) return *exit_code;
+    CommandClient& client = *std::get<std::unique_ptr<CommandClient>>(made);
     for (int jog = 0; jog < kJogs; ++jog) {
       for (const auto& [to, opening] : {std::pair{out, out_opens}, std::pair{start, !out_opens}}) {
         if (const int failed = jog_to(client, serial, to, opening); failed != kExitOk) {
@@ -487,23 +491,12 @@ class Session {
     for (const std::uint32_t serial : serials) owners.insert(table.row(serial)->participant);
     owners.erase(std::string{});
 
-    auto made = CommandClient::create(*participant_, default_origin("valvectl"));
-    if (!made) {
-      complain(made.error().reason);
-      return kExitFailure;
-    }
-    CommandClient& client = **made;
-    const auto connected = client.connect(owners, invocation_.global.command_readers,
-                                          after_timeout(), terminal_.interrupted);
-    if (!connected) {
-      complain(connected.error().reason);
-      return kExitFailure;
-    }
-    if (!*connected) {
-      if (terminal_.interrupted) return kExitInterrupted;
-      complain(unmatched_text(table, serials, client.unmatched(owners)));
-      return kExitNotFound;
-    }
+    auto made = connected_client<ValveCommand>(
+        owners, invocation_.global.command_readers, [&](const CommandClient& unmatched) {
+          return unmatched_text(table, serials, unmatched.unmatched(owners));
+        });
+    if (const int* exit_code = std::get_if<int>(&made)) return *exit_code;
+    CommandClient& client = *std::get<std::unique_ptr<CommandClient>>(made);
     std::vector<std::pair<std::uint32_t, std::uint32_t>> sent;  // serial, command id
     for (const std::uint32_t serial : serials) {
       ValveCommand command = invocation_.command.command;

@@ -58,24 +58,6 @@ void count_match(std::multiset<std::string>& participants, int change,
   }
 }
 
-template <class Sample>
-std::uint32_t id_of(const Sample& sample) {
-  if constexpr (requires { sample.command_id(); }) {
-    return sample.command_id();
-  } else {
-    return sample.change_id();
-  }
-}
-
-template <class Request>
-void set_id(Request& request, std::uint32_t id) {
-  if constexpr (requires { request.command_id(id); }) {
-    request.command_id(id);
-  } else {
-    request.change_id(id);
-  }
-}
-
 }  // namespace
 
 std::string default_origin(std::string_view program) {
@@ -196,14 +178,14 @@ Result<bool> RequestClient<Request>::connect(const std::set<std::string>& owners
 }
 
 template <class Request>
-std::optional<std::uint32_t> RequestClient<Request>::send(Request command) {
+std::optional<std::uint32_t> RequestClient<Request>::send(Request request) {
   const std::uint32_t id = next_id_++;
   if (next_id_ == 0) next_id_ = 1;
-  set_id(command, id);
-  command.origin(origin_);
+  RequestTopics<Request>::set_id(request, id);
+  request.origin(origin_);
   if (command_writer_ == nullptr) return std::nullopt;
   const auto written = command_stamps_.write_now([&](const auto& stamp) {
-    return command_writer_->write_w_timestamp(&command, eprosima::fastdds::dds::HANDLE_NIL, stamp);
+    return command_writer_->write_w_timestamp(&request, eprosima::fastdds::dds::HANDLE_NIL, stamp);
   });
   if (written != ReturnCode::RETCODE_OK) return std::nullopt;
   return id;
@@ -245,7 +227,7 @@ void RequestClient<Request>::on_data_available(DataReader* reader) {
   }
   if (ours.empty()) return;
   std::lock_guard lock(mutex_);
-  for (const Status& taken : ours) statuses_[id_of(taken)].push_back(taken);
+  for (const Status& taken : ours) statuses_[RequestTopics<Request>::id_of(taken)].push_back(taken);
   arrived_.notify_all();
 }
 

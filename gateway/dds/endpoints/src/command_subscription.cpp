@@ -68,7 +68,7 @@ Result<std::unique_ptr<CommandSubscription>> CommandSubscription::create(
   made->wait_set_.attach_condition(made->lost_->attention());
   made->wait_set_.attach_condition(made->wake_);
   if (layout_changes) {
-    auto changes = participant.topic<LayoutChangePubSubType>(topics::kLayoutChange);
+    auto changes = topics::topic_of<LayoutChange>(participant);
     auto layout_reader = changes ? participant.reader(*changes, topics::command_reader_qos(),
                                                       nullptr, StatusMask::none())
                                  : Result<DataReader*>(changes.error());

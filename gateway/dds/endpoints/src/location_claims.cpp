@@ -33,11 +33,6 @@ Result<std::unique_ptr<LocationClaims>> LocationClaims::create(
 
 LocationClaims::~LocationClaims() { participant_.delete_reader(reader_); }
 
-std::set<std::pair<std::string, std::string>> LocationClaims::contested() const {
-  std::lock_guard lock(mutex_);
-  return contested_;
-}
-
 void LocationClaims::on_data_available(DataReader* reader) {
   // Taken before locking: Fast DDS holds the reader's lock while it calls the listener.
   std::vector<std::pair<std::string, std::string>> claimed;

@@ -28,18 +28,23 @@ namespace teejet::client {
 // "PROGRAM@HOST:PID", at most 64 characters (the IDL's bound).
 std::string default_origin(std::string_view program);
 
-// What tells the two kinds of request apart: their topics, status type and id field.
+// What tells the two kinds of request apart: the status that answers one, the field that
+// carries its id, and what messages call it. Topics follow from the types (dds::topics).
 template <class Request>
 struct RequestTopics;
 template <>
 struct RequestTopics<ValveCommand> {
   using Status = CommandStatus;
   static constexpr const char* kWhat = "command";
+  static void set_id(ValveCommand& request, std::uint32_t id) { request.command_id(id); }
+  static std::uint32_t id_of(const Status& status) { return status.command_id(); }
 };
 template <>
 struct RequestTopics<LayoutChange> {
   using Status = LayoutChangeStatus;
   static constexpr const char* kWhat = "layout change";
+  static void set_id(LayoutChange& request, std::uint32_t id) { request.change_id(id); }
+  static std::uint32_t id_of(const Status& status) { return status.change_id(); }
 };
 
 template <class Request>

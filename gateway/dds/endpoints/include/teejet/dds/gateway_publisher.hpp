@@ -117,11 +117,6 @@ class GatewayPublisher final : public bridge::Sink {
     claims_.reset();
   }
 
-  // Names of its layout that another gateway claims too (location, other gateway).
-  std::set<std::pair<std::string, std::string>> contested_locations() const {
-    return claims_ ? claims_->contested() : std::set<std::pair<std::string, std::string>>{};
-  }
-
  private:
   GatewayPublisher() = default;
 

@@ -26,9 +26,6 @@ class LocationClaims final : public eprosima::fastdds::dds::DataReaderListener {
   LocationClaims(const LocationClaims&) = delete;
   LocationClaims& operator=(const LocationClaims&) = delete;
 
-  // Names of this gateway's layout that another gateway claims too, with that gateway's name.
-  std::set<std::pair<std::string, std::string>> contested() const;
-
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override;
 
  private:
@@ -39,8 +36,8 @@ class LocationClaims final : public eprosima::fastdds::dds::DataReaderListener {
   const std::string own_name_;
   const std::set<std::string> own_locations_;
   eprosima::fastdds::dds::DataReader* reader_ = nullptr;
-  mutable std::mutex mutex_;
-  std::set<std::pair<std::string, std::string>> contested_;  // (location, other gateway)
+  std::mutex mutex_;
+  std::set<std::pair<std::string, std::string>> contested_;  // (location, other gateway) logged
 };
 
 }  // namespace teejet::dds
