@@ -37,7 +37,6 @@ std::string status_text(const CommandStatus& status);
 // "location":..,"gateway":..,"kind":"assign","state":"applied","serial":"TJV000007"|null,
 // "reason":..,"change_id":..,"origin":..}.
 std::string layout_change_text(const LayoutChangeStatus& status);
-nlohmann::json layout_change_json(const LayoutChangeStatus& status);
 
 // "TJV000002 position 45.3"; {"event":"position","serial":"TJV000002","degrees":45.3}
 std::string position_text(std::uint32_t serial, double degrees);

@@ -260,7 +260,7 @@ class Session {
                request.location + "' within " + seconds_text(invocation_.global.timeout));
       return kExitTimedOut;
     }
-    emit(layout_change_text(*status), layout_change_json(*status));
+    emit(layout_change_text(*status), status_json(*status));
     return status->state() == LAYOUT_CHANGE_APPLIED ? kExitOk : kExitRejected;
   }
 

@@ -95,4 +95,19 @@ nlohmann::json status_json(const CommandStatus& status) {
   };
 }
 
+nlohmann::json status_json(const LayoutChangeStatus& status) {
+  return {
+      {"event", "layout_change"},
+      {"location", status.location().to_string()},
+      {"gateway", status.gateway().to_string()},
+      {"kind", dds::to_string(status.kind())},
+      {"state", dds::to_string(status.state())},
+      {"serial", status.serial() != 0 ? nlohmann::json(codec::format_serial(status.serial()))
+                                      : nlohmann::json(nullptr)},
+      {"reason", status.reason().to_string()},
+      {"change_id", status.change_id()},
+      {"origin", status.origin().to_string()},
+  };
+}
+
 }  // namespace teejet::client

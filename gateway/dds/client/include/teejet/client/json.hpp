@@ -29,6 +29,10 @@ nlohmann::json to_json(const LocationRow& place);
 // {"event":"status","serial":"TJV000002","command_id":17,"origin":"...","kind":"target_degrees",
 //  "state":"accepted","reason":"","stamp_ns":...}
 nlohmann::json status_json(const CommandStatus& status);
+// {"event":"layout_change","location":"section-03","gateway":"...","kind":"assign",
+//  "state":"applied","serial":"TJV000007","reason":"","change_id":4,"origin":"..."}; "serial"
+// is where the place stands after the change (null: empty).
+nlohmann::json status_json(const LayoutChangeStatus& status);
 
 // A message's fields by the codec's names, {"volts":12.1}; {} for a message without fields.
 nlohmann::json fields_json(const codec::FromValveMessage& message);
