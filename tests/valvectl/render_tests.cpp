@@ -18,6 +18,7 @@ std::vector<ValveRow> two_valves() {
   moving.address = 0xD8;
   moving.online = true;
   moving.gateway = "boom";
+  moving.location = "section-01";
   tell(moving, codec::Position{45.0});
   tell(moving, codec::Temperature{25, 24});
   tell(moving, codec::Voltage{12.3});
@@ -33,16 +34,17 @@ std::vector<ValveRow> two_valves() {
 TEST(ValvectlRender, TableAlignsColumnsAndShowsMissingValuesAsDashes) {
   // clang-format off
   const char* expected =
-R"(SERIAL     ADDR  ONLINE  POS_DEG  TEMP_C  VOLTS  ERRORS                               GATEWAY
-TJV000001  0xD8  yes        45.0      25   12.3  -                                    boom
-TJV123456  0xF7  no            -       -      -  high_voltage,min_degrees_per_second  boom
+R"(SERIAL     ADDR  ONLINE  POS_DEG  TEMP_C  VOLTS  ERRORS                               GATEWAY  LOCATION
+TJV000001  0xD8  yes        45.0      25   12.3  -                                    boom     section-01
+TJV123456  0xF7  no            -       -      -  high_voltage,min_degrees_per_second  boom     -
 )";
   // clang-format on
   EXPECT_EQ(render_table(two_valves()), expected);
 }
 
 TEST(ValvectlRender, EmptyTableIsItsHeader) {
-  EXPECT_EQ(render_table({}), "SERIAL  ADDR  ONLINE  POS_DEG  TEMP_C  VOLTS  ERRORS  GATEWAY\n");
+  EXPECT_EQ(render_table({}),
+            "SERIAL  ADDR  ONLINE  POS_DEG  TEMP_C  VOLTS  ERRORS  GATEWAY  LOCATION\n");
 }
 
 TEST(ValvectlRender, BootModeShowsInTheOnlineColumn) {

@@ -104,8 +104,9 @@ std::string one_decimal(double value) {
 
 std::string render_table(const std::vector<ValveRow>& rows) {
   const std::vector<Column> columns = {
-      {"SERIAL", kLeft},  {"ADDR", kLeft},   {"ONLINE", kLeft}, {"POS_DEG", kRight},
-      {"TEMP_C", kRight}, {"VOLTS", kRight}, {"ERRORS", kLeft}, {"GATEWAY", kLeft},
+      {"SERIAL", kLeft},   {"ADDR", kLeft},    {"ONLINE", kLeft},
+      {"POS_DEG", kRight}, {"TEMP_C", kRight}, {"VOLTS", kRight},
+      {"ERRORS", kLeft},   {"GATEWAY", kLeft}, {"LOCATION", kLeft},
   };
   std::vector<std::vector<std::string>> cells;
   for (const ValveRow& row : rows) {
@@ -118,6 +119,7 @@ std::string render_table(const std::vector<ValveRow>& rows) {
         row.volts() ? one_decimal(*row.volts()) : "-",
         errors_text(row.errors),
         row.gateway,
+        row.location.empty() ? "-" : row.location,
     });
   }
   std::ostringstream out;
@@ -215,21 +217,6 @@ std::string layout_change_text(const LayoutChangeStatus& status) {
   text += status.serial() != 0 ? ": " + codec::format_serial(status.serial()) + " sits there"
                                : std::string(": empty");
   return reason.empty() ? text : text + " (" + reason + ")";
-}
-
-nlohmann::json layout_change_json(const LayoutChangeStatus& status) {
-  return {
-      {"event", "layout_change"},
-      {"location", status.location().to_string()},
-      {"gateway", status.gateway().to_string()},
-      {"kind", dds::to_string(status.kind())},
-      {"state", dds::to_string(status.state())},
-      {"serial", status.serial() != 0 ? nlohmann::json(codec::format_serial(status.serial()))
-                                      : nlohmann::json(nullptr)},
-      {"reason", status.reason().to_string()},
-      {"change_id", status.change_id()},
-      {"origin", status.origin().to_string()},
-  };
 }
 
 std::string position_text(std::uint32_t serial, double degrees) {
