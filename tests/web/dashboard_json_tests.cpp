@@ -159,6 +159,37 @@ TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
   EXPECT_EQ(batcher.tick(dashboard_frame(table, {}), 80), std::nullopt);
 }
 
+TEST(WebUpdates, ALayoutChangesStatusGoesWithTheCommandsInOrder) {
+  client::ValveTable table = three_valves();
+  UpdateBatcher batcher;
+  batcher.snapshot(dashboard_frame(table, {}));
+  batcher.add_status(status(1, 7, COMMAND_COMPLETED));
+  LayoutChangeStatus change;
+  change.change_id(4);
+  change.origin("teejet-web@host:1");
+  change.location("section-03");
+  change.gateway("gw");
+  change.kind(LAYOUT_ASSIGN);
+  change.state(LAYOUT_CHANGE_REJECTED);
+  change.serial(0);
+  change.reason("TJV000009 is not online on this gateway's bus");
+  batcher.add_status(change);
+  const auto update = batcher.tick(dashboard_frame(table, {}), 40);
+  ASSERT_TRUE(update);
+  ASSERT_EQ((*update)["statuses"].size(), 2u);
+  EXPECT_EQ((*update)["statuses"][0]["event"], "status");
+  EXPECT_EQ((*update)["statuses"][1],
+            (json{{"event", "layout_change"},
+                  {"location", "section-03"},
+                  {"gateway", "gw"},
+                  {"kind", "assign"},
+                  {"state", "rejected"},
+                  {"serial", nullptr},
+                  {"reason", "TJV000009 is not online on this gateway's bus"},
+                  {"change_id", 4},
+                  {"origin", "teejet-web@host:1"}}));
+}
+
 TEST(WebUpdates, EveryPlaceIsInTheSnapshotInMachineOrderAndAChangedOneInTheNextTick) {
   client::ValveTable table = three_valves();
   const auto place = [](const char* name, std::uint16_t order, std::uint32_t serial,

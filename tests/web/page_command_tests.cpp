@@ -23,8 +23,15 @@ class RecordingSender final : public CommandSender {
     sent.push_back(command);
     return command.command_id();
   }
+  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override {
+    if (failing) return Error{ErrorCode::kInvalidValue, "gateway gw did not subscribe"};
+    change.change_id(next_id_++);
+    changes.emplace_back(change, participant);
+    return change.change_id();
+  }
   bool failing = false;
   std::vector<ValveCommand> sent;
+  std::vector<std::pair<LayoutChange, std::string>> changes;  // with the gateway's participant
 
  private:
   std::uint32_t next_id_ = 100;
@@ -34,13 +41,18 @@ const CommandPolicy kAllow{true, ""};
 
 // The reason a message is refused with, with commands allowed; "" when it was sent. Refused
 // messages must reach no valve.
-std::string refusal(std::string_view text, const CommandPolicy& policy = kAllow) {
+std::string refusal(std::string_view text, const CommandPolicy& policy = kAllow,
+                    const client::ValveTable& table = testing::three_valves()) {
   RecordingSender sender;
-  const json answer = handle_page_message(text, testing::three_valves(), policy, sender);
+  const json answer = handle_page_message(text, table, policy, sender);
   if (answer["type"] == "sent") return "";
   EXPECT_EQ(answer["type"], "refused");
   EXPECT_TRUE(sender.sent.empty()) << text;
+  EXPECT_TRUE(sender.changes.empty()) << text;
   return answer["reason"].get<std::string>();
+}
+std::string refusal_on_the_boom(std::string_view text) {
+  return refusal(text, kAllow, testing::three_valves_on_a_boom());
 }
 
 TEST(WebCommands, AMoveIsSentWithItsValuesAndTheAnswerNamesTheCommandId) {
@@ -159,10 +171,11 @@ TEST(WebCommands, MalformedUnknownAndIncompleteMessagesAreRefused) {
   EXPECT_EQ(refusal(""), "malformed JSON");
   EXPECT_EQ(refusal("[1,2]"), "a command must be a JSON object");
   EXPECT_EQ(refusal(R"({"serial":"TJV000001"})"),
-            "missing \"command\": one of move, stop, stop_all, manual, jog, request, clear_errors");
+            "missing \"command\": one of move, stop, stop_all, manual, jog, request, clear_errors, "
+            "assign, unassign");
   EXPECT_EQ(refusal(R"({"command":"fly","serial":"TJV000001"})"),
             "unknown command \"fly\": one of move, stop, stop_all, manual, jog, request, "
-            "clear_errors");
+            "clear_errors, assign, unassign");
   EXPECT_EQ(refusal(R"({"command":"move","serial":"TJV000001","degrees":10})"),
             "move: missing \"speed_percent\"");
   EXPECT_EQ(refusal(R"({"command":"stop","serial":"TJV000001","degrees":10})"),
@@ -244,6 +257,99 @@ TEST(WebCommands, OnlyANumberOrAShortStringIdIsEchoed) {
   EXPECT_EQ(id_of("[1]"), nullptr);
   EXPECT_EQ(id_of("true"), nullptr);
   EXPECT_EQ(id_of("null"), nullptr);
+}
+
+TEST(WebCommands, AValveNamedByItsPlaceIsCommandedByTheSerialThatSitsThere) {
+  RecordingSender sender;
+  const json answer = handle_page_message(R"({"id":1,"command":"stop","location":"section-02"})",
+                                          testing::three_valves_on_a_boom(), kAllow, sender);
+  EXPECT_EQ(answer["commands"], json::array({{{"serial", "TJV000002"}, {"command_id", 100}}}));
+  ASSERT_EQ(sender.sent.size(), 1u);
+  EXPECT_EQ(sender.sent[0].serial(), 2u);
+  EXPECT_EQ(sender.sent[0].kind(), COMMAND_STOP);
+}
+
+TEST(WebCommands, APlaceThatNamesNoKnownValveOrTwoGatewaysClaimIsRefused) {
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":"section-09"})"),
+            "unknown location \"section-09\": no gateway's layout has it");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":"section-03"})"),
+            "location \"section-03\" on gw is empty: no valve sits there");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":"section-04"})"),
+            "location \"section-04\" holds TJV000009, which no gateway knows");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":"twice"})"),
+            "location \"twice\" is in the layouts of 2 gateways (gw, gw2): a name belongs to one");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":"section-01","serial":"1"})"),
+            "stop: name the valve by \"serial\" or by \"location\", not both");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop","location":7})"),
+            "location must be a string like \"section-01\"");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"stop_all","location":"section-01"})"),
+            "stop_all: unknown field \"location\"");
+}
+
+TEST(WebCommands, AnAssignmentGoesToTheGatewayWhoseLayoutHoldsThePlace) {
+  RecordingSender sender;
+  const json answer = handle_page_message(
+      R"({"id":"a","command":"assign","location":"section-03","serial":"TJV000003","move":true})",
+      testing::three_valves_on_a_boom(), kAllow, sender);
+  EXPECT_EQ(
+      answer,
+      (json{{"type", "sent"},
+            {"id", "a"},
+            {"changes",
+             json::array({{{"location", "section-03"}, {"gateway", "gw"}, {"change_id", 100}}})}}));
+  ASSERT_EQ(sender.changes.size(), 1u);
+  const auto& [change, participant] = sender.changes[0];
+  EXPECT_EQ(participant, "01.0f.aa");
+  EXPECT_EQ(change.location().to_string(), "section-03");
+  EXPECT_EQ(change.gateway().to_string(), "gw");
+  EXPECT_EQ(change.kind(), LAYOUT_ASSIGN);
+  EXPECT_EQ(change.serial(), 3u);
+  EXPECT_TRUE(change.move());
+  EXPECT_TRUE(sender.sent.empty());
+
+  RecordingSender unassigning;
+  handle_page_message(R"({"command":"unassign","location":"section-01"})",
+                      testing::three_valves_on_a_boom(), kAllow, unassigning);
+  ASSERT_EQ(unassigning.changes.size(), 1u);
+  EXPECT_EQ(unassigning.changes[0].first.kind(), LAYOUT_UNASSIGN);
+  EXPECT_EQ(unassigning.changes[0].first.location().to_string(), "section-01");
+  EXPECT_FALSE(unassigning.changes[0].first.move());
+}
+
+TEST(WebCommands, ALayoutChangeIsRefusedWithItsReasonAndReachesNoGateway) {
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"assign","location":"section-09","serial":"3"})"),
+            "assign: unknown location \"section-09\": no gateway's layout has it");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"assign","location":"twice","serial":"3"})"),
+            "assign: location \"twice\" is in the layouts of 2 gateways (gw, gw2): a name "
+            "belongs to one");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"assign","location":"section-03"})"),
+            "assign: missing \"serial\"");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"assign","location":"section-03","serial":3})"),
+            "assign: serial must be a string like \"TJV000001\"");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"assign","location":"section-03","serial":"TJX1"})")
+                .substr(0, 24),
+            "assign: invalid serial: ");
+  EXPECT_EQ(refusal_on_the_boom(
+                R"({"command":"assign","location":"section-03","serial":"3","move":"yes"})"),
+            "assign: move must be true or false");
+  EXPECT_EQ(refusal_on_the_boom(R"({"command":"unassign","location":"section-01","serial":"1"})"),
+            "unassign: unknown field \"serial\"");
+  EXPECT_EQ(refusal(R"({"command":"unassign","location":"section-01"})", CommandPolicy{false, ""},
+                    testing::three_valves_on_a_boom()),
+            "commands are disabled: teejet-web runs read-only (start it with --allow-commands)");
+  EXPECT_EQ(refusal(R"({"command":"unassign","location":"section-01"})", CommandPolicy{true, "k"},
+                    testing::three_valves_on_a_boom()),
+            "missing or wrong \"token\"");
+}
+
+TEST(WebCommands, ALayoutChangeDdsDidNotTakeSaysWhy) {
+  RecordingSender sender;
+  sender.failing = true;
+  const json answer = handle_page_message(R"({"command":"unassign","location":"section-01"})",
+                                          testing::three_valves_on_a_boom(), kAllow, sender);
+  EXPECT_EQ(answer["changes"], json::array({{{"location", "section-01"},
+                                             {"gateway", "gw"},
+                                             {"error", "gateway gw did not subscribe"}}}));
 }
 
 TEST(WebCommands, ThePolicyTellsThePageWhetherCommandsAndATokenAreNeededButNotTheToken) {

@@ -9,6 +9,7 @@
 
 namespace teejet::web::testing {
 
+using teejet::testing::location;
 using teejet::testing::presence;
 
 // Valves 1 and 2 online, 3 offline, on gateway "gw".
@@ -17,6 +18,20 @@ inline client::ValveTable three_valves() {
   table.on_presence(presence(1, true));
   table.on_presence(presence(2, true));
   table.on_presence(presence(3, false));
+  return table;
+}
+
+// three_valves() on gateway "gw" (participant "01.0f.aa") with a layout: section-01 holds
+// TJV000001, section-02 TJV000002, section-03 is empty, section-04 waits for the unseen TJV000009;
+// "twice" is also claimed by gateway "gw2" (participant "01.0f.bb").
+inline client::ValveTable three_valves_on_a_boom() {
+  client::ValveTable table = three_valves();
+  table.on_location(location("section-01", "gw", 1, 1, LOCATION_OK), "01.0f.aa");
+  table.on_location(location("section-02", "gw", 2, 2, LOCATION_OK), "01.0f.aa");
+  table.on_location(location("section-03", "gw", 3, std::nullopt, LOCATION_EMPTY), "01.0f.aa");
+  table.on_location(location("section-04", "gw", 4, 9, LOCATION_MISSING), "01.0f.aa");
+  table.on_location(location("twice", "gw", 5, std::nullopt, LOCATION_EMPTY), "01.0f.aa");
+  table.on_location(location("twice", "gw2", 1, std::nullopt, LOCATION_EMPTY), "01.0f.bb");
   return table;
 }
 

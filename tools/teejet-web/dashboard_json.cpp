@@ -83,6 +83,10 @@ void UpdateBatcher::add_status(const CommandStatus& status) {
   statuses_.push_back(client::status_json(status));
 }
 
+void UpdateBatcher::add_status(const LayoutChangeStatus& status) {
+  statuses_.push_back(client::status_json(status));
+}
+
 std::optional<nlohmann::json> UpdateBatcher::tick(const DashboardFrame& frame,
                                                   std::uint64_t stamp_ms) {
   nlohmann::json valves = nlohmann::json::array();

@@ -52,6 +52,7 @@ class UpdateBatcher {
   nlohmann::json snapshot(const DashboardFrame& frame);
 
   void add_status(const CommandStatus& status);
+  void add_status(const LayoutChangeStatus& status);  // "event":"layout_change" in "statuses"
 
   // {"type":"update","tick":N,"stamp_ms":..,"valves":[changed],"gateways":[changed],
   //  "places":[changed],"statuses":[since the last tick]}, or nullopt when nothing changed

@@ -37,7 +37,19 @@ const std::array<Shape, 7> kShapes{{
 }};
 constexpr const char* kReadOnly =
     "commands are disabled: teejet-web runs read-only (start it with --allow-commands)";
-constexpr const char* kCommandNames = "move, stop, stop_all, manual, jog, request, clear_errors";
+constexpr const char* kCommandNames =
+    "move, stop, stop_all, manual, jog, request, clear_errors, assign, unassign";
+// Layout changes: the fields each takes, and those it may leave out.
+struct LayoutShape {
+  std::string_view name;
+  LayoutChangeKind kind;
+  std::vector<std::string_view> fields;
+  std::vector<std::string_view> optional_fields;
+};
+const std::array<LayoutShape, 2> kLayoutShapes{{
+    {"assign", LAYOUT_ASSIGN, {"location", "serial"}, {"move"}},
+    {"unassign", LAYOUT_UNASSIGN, {"location"}, {}},
+}};
 
 std::vector<std::string_view> fields_of(const Shape& shape) {
   std::vector<std::string_view> fields;
@@ -58,6 +70,39 @@ Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& 
     return refused("unknown serial " + codec::format_serial(*serial) + ": no gateway knows it");
   }
   return *serial;
+}
+
+// The one place called `value` among the gateways' layouts: two gateways claiming a name is a
+// mistake of their layouts, and a change or command sent to either could be the wrong one.
+Result<client::LocationRow> the_place(const json& value, const client::ValveTable& table) {
+  if (!value.is_string()) return refused("location must be a string like \"section-01\"");
+  const auto name = value.get<std::string>();
+  const auto places = table.locations_named(name);
+  if (places.empty())
+    return refused("unknown location \"" + name + "\": no gateway's layout has it");
+  if (places.size() > 1) {
+    std::string gateways;
+    for (const auto& place : places) gateways += (gateways.empty() ? "" : ", ") + place.gateway;
+    return refused("location \"" + name + "\" is in the layouts of " +
+                   std::to_string(places.size()) + " gateways (" + gateways +
+                   "): a name belongs to one");
+  }
+  return places.front();
+}
+
+// The serial of the valve at place `value`.
+Result<std::uint32_t> serial_at(const json& value, const client::ValveTable& table) {
+  const auto place = the_place(value, table);
+  if (!place) return place.error();
+  if (!place->serial) {
+    return refused("location \"" + place->name + "\" on " + place->gateway +
+                   " is empty: no valve sits there");
+  }
+  if (!table.row(*place->serial)) {
+    return refused("location \"" + place->name + "\" holds " +
+                   codec::format_serial(*place->serial) + ", which no gateway knows");
+  }
+  return *place->serial;
 }
 
 // The message's fields from the page's values, refused as the codec refuses them.
@@ -174,14 +219,22 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
   if (shape == kShapes.end()) {
     return refused("unknown command \"" + name + "\": one of " + kCommandNames);
   }
+  // A valve is named by its serial or by its place; "location" stands in for "serial".
+  const bool by_location = !shape->every_online_valve && message.contains("location");
+  if (by_location && message.contains("serial")) {
+    return refused(name + ": name the valve by \"serial\" or by \"location\", not both");
+  }
   const auto fields = fields_of(*shape);
   for (const auto& [key, value] : message.items()) {
-    if (key == "command" || key == "id" || key == "token") continue;
+    if (key == "command" || key == "id" || key == "token" || (by_location && key == "location")) {
+      continue;
+    }
     if (std::find(fields.begin(), fields.end(), key) == fields.end()) {
       return refused(name + ": unknown field \"" + key + "\"");
     }
   }
   for (const std::string_view field : fields) {
+    if (by_location && field == "serial") continue;
     if (!message.contains(std::string(field))) {
       return refused(name + ": missing \"" + std::string(field) + "\"");
     }
@@ -194,13 +247,61 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
     }
     if (checked.serials.empty()) return refused("stop_all: no valve is online");
   } else {
-    const auto serial = known_serial(message.at("serial"), table);
+    const auto serial = by_location ? serial_at(message.at("location"), table)
+                                    : known_serial(message.at("serial"), table);
     if (!serial) return serial.error();
     checked.serials.push_back(*serial);
   }
   auto command = build(*shape, message);
   if (!command) return refused(name + ": " + command.error().reason);
   checked.command = std::move(*command);
+  return checked;
+}
+
+Result<PageLayoutChange> check_page_layout_change(const json& message,
+                                                  const client::ValveTable& table) {
+  if (!message.is_object() || !message.contains("command") || !message.at("command").is_string()) {
+    return refused("a layout change must be a JSON object with \"command\"");
+  }
+  const auto name = message.at("command").get<std::string>();
+  const auto shape = std::find_if(kLayoutShapes.begin(), kLayoutShapes.end(),
+                                  [&](const LayoutShape& s) { return s.name == name; });
+  if (shape == kLayoutShapes.end()) {
+    return refused("unknown layout change \"" + name + "\": assign or unassign");
+  }
+  const auto among = [](const std::vector<std::string_view>& names, std::string_view key) {
+    return std::find(names.begin(), names.end(), key) != names.end();
+  };
+  for (const auto& item : message.items()) {
+    const std::string& key = item.key();
+    if (key == "command" || key == "id" || key == "token") continue;
+    if (!among(shape->fields, key) && !among(shape->optional_fields, key)) {
+      return refused(name + ": unknown field \"" + key + "\"");
+    }
+  }
+  for (const std::string_view field : shape->fields) {
+    if (!message.contains(std::string(field))) {
+      return refused(name + ": missing \"" + std::string(field) + "\"");
+    }
+  }
+  const auto place = the_place(message.at("location"), table);
+  if (!place) return refused(name + ": " + place.error().reason);
+  PageLayoutChange checked;
+  checked.participant = place->participant;
+  checked.change.location(place->name);
+  checked.change.gateway(place->gateway);
+  checked.change.kind(shape->kind);
+  if (shape->kind == LAYOUT_ASSIGN) {
+    const json& serial = message.at("serial");
+    if (!serial.is_string()) return refused(name + ": serial must be a string like \"TJV000001\"");
+    const auto parsed = codec::parse_serial(serial.get<std::string>());
+    if (!parsed) return refused(name + ": invalid serial: " + parsed.error().reason);
+    checked.change.serial(*parsed);
+    if (message.contains("move")) {
+      if (!message.at("move").is_boolean()) return refused(name + ": move must be true or false");
+      checked.change.move(message.at("move").get<bool>());
+    }
+  }
   return checked;
 }
 
@@ -284,6 +385,23 @@ json handle_page_message(std::string_view text, const client::ValveTable& table,
     } else if (!tokens_equal(token, policy.token)) {
       return refuse(kWrongToken);
     }
+  }
+  const bool layout_change =
+      message->is_object() && message->contains("command") &&
+      std::any_of(kLayoutShapes.begin(), kLayoutShapes.end(),
+                  [&](const LayoutShape& shape) { return message->at("command") == shape.name; });
+  if (layout_change) {
+    const auto change = check_page_layout_change(*message, table);
+    if (!change) return refuse(change.error().reason);
+    json sent{{"location", change->change.location().to_string()},
+              {"gateway", change->change.gateway().to_string()}};
+    const auto change_id = sender.send(change->change, change->participant);
+    if (change_id) {
+      sent["change_id"] = *change_id;
+    } else {
+      sent["error"] = change_id.error().reason;
+    }
+    return json{{"type", "sent"}, {"id", id}, {"changes", json::array({sent})}};
   }
   const auto checked = check_page_command(*message, table);
   if (!checked) return refuse(checked.error().reason);

@@ -35,12 +35,26 @@ struct PageCommand {
   ValveCommand command;  // serial, command_id and origin are set per send
 };
 
+// A checked change of a gateway's layout (assign, unassign): for the gateway whose layout holds
+// the place, and only for it.
+struct PageLayoutChange {
+  LayoutChange change;      // change_id and origin are set when sent
+  std::string participant;  // that gateway's (client::LocationRow::participant)
+};
+
 // {"command":"move","serial":"TJV000001","degrees":90,"speed_percent":100,"direction":"open"}
-// and the others of docs/web.md; an Error names what was wrong.
+// and the others of docs/web.md; a valve is named by "serial" or by "location" (the place it
+// sits at); an Error names what was wrong.
 Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table);
 // The same for a message already parsed (discarded when it was not JSON).
 Result<PageCommand> check_page_command(const nlohmann::json& message,
                                        const client::ValveTable& table);
+
+// {"command":"assign","location":"section-03","serial":"TJV000007","move":false} ("move"
+// optional) or {"command":"unassign","location":"section-03"}: the place must be in exactly one
+// gateway's layout; whether the serial may go there is the gateway's to judge.
+Result<PageLayoutChange> check_page_layout_change(const nlohmann::json& message,
+                                                  const client::ValveTable& table);
 
 // Where checked commands go: CommandClient in teejet-web, a recorder in the tests.
 class CommandSender {
@@ -48,6 +62,8 @@ class CommandSender {
   virtual ~CommandSender() = default;
   // The command_id the command was written with, or an Error saying why it was not written.
   virtual Result<std::uint32_t> send(ValveCommand command) = 0;
+  // The same for a layout change, to the gateway of `participant`: its change_id.
+  virtual Result<std::uint32_t> send(LayoutChange change, const std::string& participant) = 0;
 };
 
 struct CommandPolicy {
@@ -72,7 +88,9 @@ using TokenCheck = std::function<std::optional<std::string>(std::string_view tok
 
 // The answer to one message from the page:
 // {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did
-// not take has "error":"why" instead of "command_id") or
+// not take has "error":"why" instead of "command_id"),
+// {"type":"sent","id":ID,"changes":[{"location":"section-03","gateway":"boom","change_id":4}]}
+// for a layout change (or "error" likewise) or
 // {"type":"refused","id":ID,"reason":"..."}; "id" echoes the page's own "id" when it is a number
 // or a string of at most kMaxIdBytes, null otherwise. With a token in `policy`, a message's
 // "token" goes to `check_token` (when given; compared with the policy's otherwise).

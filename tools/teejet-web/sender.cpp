@@ -29,7 +29,33 @@ Result<std::uint32_t> DdsSender::send(ValveCommand command) {
   return *id;
 }
 
-std::vector<CommandStatus> DdsSender::take_statuses() {
+Result<std::uint32_t> DdsSender::send(LayoutChange change, const std::string& participant) {
+  std::lock_guard lock(layout_mutex_);
+  if (!layout_client_) {
+    auto made = client::LayoutClient::create(participant_, client::default_origin("teejet-web"));
+    if (!made) return made.error();
+    layout_client_ = std::move(*made);
+  }
+  const std::atomic<bool> never{false};
+  const auto matched =
+      layout_client_->connect({participant}, 0, Clock::now() + kConnectTimeout, never);
+  if (!matched) return matched.error();
+  if (!*matched) {
+    return Error{ErrorCode::kInvalidValue, "gateway " + change.gateway().to_string() +
+                                               " did not subscribe to layout changes within 5 s; "
+                                               "nothing was sent"};
+  }
+  const auto id = layout_client_->send(change);
+  if (!id) return Error{ErrorCode::kInvalidValue, "DDS did not take the layout change"};
+  open_changes_.insert(*id);
+  return *id;
+}
+
+DdsSender::Statuses DdsSender::take_statuses() {
+  return {take_command_statuses(), take_layout_change_statuses()};
+}
+
+std::vector<CommandStatus> DdsSender::take_command_statuses() {
   std::lock_guard lock(mutex_);
   std::vector<CommandStatus> statuses;
   if (!client_) return statuses;
@@ -41,6 +67,21 @@ std::vector<CommandStatus> DdsSender::take_statuses() {
       final = final || status->state() != COMMAND_ACCEPTED;
     }
     it = final ? open_.erase(it) : std::next(it);
+  }
+  return statuses;
+}
+
+// A gateway answers a layout change once, applied or rejected. The lock is tried, not waited
+// for: a send holds it while its gateway matches (up to 5 s), and the ticks must go on meanwhile;
+// what arrived is taken at a later tick.
+std::vector<LayoutChangeStatus> DdsSender::take_layout_change_statuses() {
+  std::vector<LayoutChangeStatus> statuses;
+  std::unique_lock lock(layout_mutex_, std::try_to_lock);
+  if (!lock || !layout_client_) return statuses;
+  for (auto it = open_changes_.begin(); it != open_changes_.end();) {
+    const auto status = layout_client_->next_status(*it, Clock::now());
+    if (status) statuses.push_back(*status);
+    it = status ? open_changes_.erase(it) : std::next(it);
   }
   return statuses;
 }

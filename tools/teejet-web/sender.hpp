@@ -1,7 +1,8 @@
 #pragma once
 
 // How the page's commands reach the valves: through the DDS client's CommandClient, whose
-// statuses are followed for the ticks, and for the targets of teejet-web's own moves.
+// statuses are followed for the ticks, and for the targets of teejet-web's own moves; and how
+// its layout changes reach the gateways: through a LayoutClient, likewise followed.
 
 #include <cstdint>
 #include <memory>
@@ -27,14 +28,21 @@ class DdsSender final : public CommandSender {
       : participant_(participant), view_(view) {}
 
   Result<std::uint32_t> send(ValveCommand command) override;
+  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override;
 
   // The statuses that arrived since the last call, in order; the tick hands them to every page.
-  std::vector<CommandStatus> take_statuses();
+  struct Statuses {
+    std::vector<CommandStatus> commands;
+    std::vector<LayoutChangeStatus> layout_changes;
+  };
+  Statuses take_statuses();
 
   Targets targets();
 
  private:
   Result<client::CommandClient*> connected();
+  std::vector<CommandStatus> take_command_statuses();
+  std::vector<LayoutChangeStatus> take_layout_change_statuses();
 
   dds::Participant& participant_;
   client::ValveView& view_;
@@ -43,6 +51,11 @@ class DdsSender final : public CommandSender {
   std::unique_ptr<client::CommandClient> client_;
   TargetTracker tracker_;
   std::set<std::uint32_t> open_;  // command ids not yet final
+  // Made on the first layout change, and each change waits for its gateway to match it: a
+  // setup page may assign on a gateway that joined after the first change.
+  std::mutex layout_mutex_;
+  std::unique_ptr<client::LayoutClient> layout_client_;
+  std::set<std::uint32_t> open_changes_;  // change ids not yet answered
 };
 
 }  // namespace teejet::web

@@ -298,7 +298,7 @@ struct Server::Impl {
         tls(options.tls) {}
 
   void accept();
-  void feed_pages(const std::vector<CommandStatus>& statuses, std::uint64_t stamp_ms);
+  void feed_pages(const DdsSender::Statuses& statuses, std::uint64_t stamp_ms);
   Response respond(const Request& request) const;
 
   const CommandPolicy policy;
@@ -700,13 +700,16 @@ void Server::Impl::accept() {
   });
 }
 
-void Server::Impl::feed_pages(const std::vector<CommandStatus>& statuses, std::uint64_t stamp_ms) {
+void Server::Impl::feed_pages(const DdsSender::Statuses& statuses, std::uint64_t stamp_ms) {
   // With no page open (most of a bench's day) there is nobody to build a frame for; a page that
   // opens starts from a snapshot of its own.
   if (pages.empty()) return;
   const DashboardFrame frame = dashboard_frame(view.snapshot(), sender.targets());
   for (ServedPage* page : pages) {
-    for (const CommandStatus& status : statuses) page->batcher.add_status(status);
+    for (const CommandStatus& status : statuses.commands) page->batcher.add_status(status);
+    for (const LayoutChangeStatus& status : statuses.layout_changes) {
+      page->batcher.add_status(status);
+    }
     if (const auto update = page->batcher.tick(frame, stamp_ms)) page->deliver(*update);
   }
 }
