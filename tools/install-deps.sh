@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Install every Debian package that building, testing and running the tools of
 # teejet-dds-gateway needs, and the npm packages of the independent MCAP reader
-# (tests/mcap-js, pinned in its package-lock.json). Idempotent: when everything is
+# (tests/mcap-js) and of the dashboard's QR decoder (tools/teejet-web/qr), each pinned in its
+# package-lock.json. Idempotent: when everything is
 # already installed it changes nothing and does not touch the network.
 #
 # Usage: tools/install-deps.sh               install what is missing
@@ -78,7 +79,9 @@ PACKAGES=(
   ccache
   # DDS-Security material (tools/pki): the openssl command line
   openssl
-  # (Node and npm for tests/mcap-js: see NODE_PACKAGES below)
+  # (Node and npm for tests/mcap-js and tools/teejet-web/qr: see NODE_PACKAGES below)
+  # the QR code of a valve's serial, for the dashboard's camera test (tests/web/qr_video.py)
+  qrencode
   # sanitizer builds and fuzz targets (asan, tsan presets): clang, its sanitizer and libFuzzer
   # runtimes, and llvm-symbolizer (package llvm) for file:line in reports
   clang
@@ -112,17 +115,16 @@ BUILD_PACKAGES=(
   zlib1g-dev
 )
 
-# Node (18 or newer) and npm run the independent MCAP reader of tests/mcap-js. Debian's
+# Node (18 or newer) and npm run the independent MCAP reader of tests/mcap-js and fetch the QR
+# decoder teejet-web serves (tools/teejet-web/qr; without it the page's setup view offers no
+# camera, and the build says so). Debian's
 # packages only when the commands are missing: a Node from elsewhere (nodesource bundles npm)
 # conflicts with Debian's npm package and serves as well.
 NODE_PACKAGES=()
 command -v node >/dev/null 2>&1 || NODE_PACKAGES+=(nodejs)
 command -v npm >/dev/null 2>&1 || NODE_PACKAGES+=(npm)
 
-MCAP_JS="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/mcap-js"
-# npm ci runs when the lockfile differs from the one node_modules was installed from, whose
-# sha256 this file holds; npm ci empties node_modules first, so a failed install leaves none.
-MCAP_JS_STAMP="$MCAP_JS/node_modules/.teejet-lockfile-sha256"
+SOURCE_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 log() { printf 'install-deps: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
@@ -198,28 +200,34 @@ install_debian_packages() {
 
 # As the user who runs this script (not root through sudo), so that node_modules is theirs.
 install_npm_packages() {
-  local lockfile="$MCAP_JS/package-lock.json" want have=""
+  local dir="$SOURCE_ROOT/$1" what="$2" want have=""
+  local lockfile="$dir/package-lock.json"
+  # npm ci runs when the lockfile differs from the one node_modules was installed from, whose
+  # sha256 the stamp holds; npm ci empties node_modules first, so a failed install leaves none.
+  local stamp="$dir/node_modules/.teejet-lockfile-sha256"
   if [[ ! -f "$lockfile" ]]; then
     # e.g. docker/Dockerfile, which runs this script before copying the sources
-    log "no $lockfile: npm packages not installed"
+    log "no $lockfile: npm packages of $1 not installed"
     return
   fi
   command -v node >/dev/null 2>&1 || die "node not found after installing nodejs"
   command -v npm >/dev/null 2>&1 || die "npm not found after installing npm"
   node -e 'process.exit(Number(process.versions.node.split(".")[0]) >= 18 ? 0 : 1)' ||
-    die "node $(node --version) is too old: tests/mcap-js needs Node 18 or newer"
+    die "node $(node --version) is too old: $1 needs Node 18 or newer"
   want="$(sha256sum "$lockfile" | cut -d' ' -f1)"
-  [[ -f "$MCAP_JS_STAMP" ]] && have="$(<"$MCAP_JS_STAMP")"
+  [[ -f "$stamp" ]] && have="$(<"$stamp")"
   if [[ "$have" == "$want" ]]; then
-    log "npm packages of tests/mcap-js already installed"
+    log "npm packages of $1 ($what) already installed"
     return
   fi
-  log "installing the npm packages of tests/mcap-js (npm ci)"
-  (cd "$MCAP_JS" && npm ci --no-audit --no-fund) ||
-    die "npm ci in $MCAP_JS failed"
-  printf '%s\n' "$want" >"$MCAP_JS_STAMP"
-  log "installed the npm packages of tests/mcap-js"
+  log "installing the npm packages of $1 ($what; npm ci)"
+  (cd "$dir" && npm ci --no-audit --no-fund) || die "npm ci in $dir failed"
+  printf '%s\n' "$want" >"$stamp"
+  log "installed the npm packages of $1"
 }
 
 install_debian_packages
-((build_only)) || install_npm_packages
+if ! ((build_only)); then
+  install_npm_packages tests/mcap-js "the independent MCAP reader"
+  install_npm_packages tools/teejet-web/qr "the dashboard's QR decoder"
+fi

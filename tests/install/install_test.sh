@@ -12,7 +12,7 @@ cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
 
 for f in bin/valve-decode bin/valve-sim bin/teejet-gateway bin/valvectl bin/teejet-record bin/teejet-replay \
   bin/teejet-web share/teejet-web/www/index.html share/teejet-web/www/dashboard.js \
-  share/teejet-web/www/plot.js share/teejet-web/www/dashboard.css \
+  share/teejet-web/www/plot.js share/teejet-web/www/setup.js share/teejet-web/www/dashboard.css \
   share/teejet/idl/valve.idl include/teejet/valve.h \
   include/teejet/valvePubSubTypes.h include/teejet/valveTypeObject.h \
   include/teejet/codec/codec.hpp include/teejet/dds/participant.hpp \

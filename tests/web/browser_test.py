@@ -24,9 +24,15 @@ read-only, and headless Chromium driven by Selenium through chromedriver:
       the boom strip shows the four places in machine order, section-04 "empty"; the cards are
       titled by place with the serial beneath, and TJV000004 says it is unassigned;
   (j) Identify on TJV000003's card jogs it out and back twice: its status line ends "identified,
-      back at 0.0°" and the dial is back at 0.
+      back at 0.0°" and the dial is back at 0;
+  (k) the setup view: the unassigned list shows TJV000004; the fake camera (Chromium's
+      --use-file-for-fake-video-capture, a video of a QR code that qrencode made of a label
+      holding "TJV000004" among other text) is scanned into the serial field; Assign to
+      section-04 (offered first: it is empty) ends "applied: TJV000004 sits there"; the boom
+      strip and TJV000004's card then show it at section-04, the unassigned list is empty, and
+      the gateway's layout file holds TJV000004 at section-04.
 
-Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Every wait is a
+Exit 77 (skipped) when chromium, chromedriver, python3-selenium or qrencode is missing. Every wait is a
 condition with a deadline; every failure says what differed.
 """
 
@@ -45,6 +51,7 @@ import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 from waiting import Timeout, eventually  # noqa: E402 (tests/support)
+from qr_video import QrencodeMissing, write_qr_video  # noqa: E402 (beside this file)
 
 COMMANDS_PORT = 18180
 READONLY_PORT = 18181
@@ -53,6 +60,8 @@ TOKEN = "s3cret"
 FRAMING_PORT = 18183
 REBOUND_NAME = "attacker.test"
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
+# What the valve's QR label holds: the sheet does not say, so the serial among other text.
+QR_LABEL = "TeeJet valve SN:TJV000004 P/N 364E"
 READ_ONLY_REASON = ("commands are disabled: teejet-web runs read-only (start it with "
                     "--allow-commands)")
 
@@ -151,7 +160,57 @@ def degrees(text):
         return None
 
 
-def commanding_page(driver, artifacts, screenshot):
+SETUP_JS = """
+const q = (s) => document.querySelector(s);
+return {visible: !q('#setup').hidden,
+        unassigned: [...document.querySelectorAll('#unassigned-list .pick-unassigned')]
+                      .map(b => b.dataset.serial),
+        serial: q('#assign-serial') ? q('#assign-serial').value : null,
+        location: q('#assign-location') ? q('#assign-location').value : null,
+        hint: q('#scan-hint') ? q('#scan-hint').textContent : null,
+        status: q('#setup-status') ? q('#setup-status').textContent : null,
+        state: q('#setup-status') ? (q('#setup-status').dataset.state || null) : null};
+"""
+
+
+def setup_view(driver, layout, artifacts):
+    driver.find_element(By.ID, "setup-toggle").click()
+    seen = eventually(lambda: driver.execute_script(SETUP_JS), 10,
+                      "the setup view listing TJV000004 as unassigned",
+                      ok=lambda v: v["visible"] and v["unassigned"] == ["TJV000004"])
+    check(seen["location"] == "section-04",
+          f"the setup view offers {seen['location']!r} first, not the empty section-04")
+    driver.find_element(By.ID, "scan-start").click()
+    scanned = eventually(lambda: driver.execute_script(SETUP_JS), 20,
+                         "the camera's QR code read into the serial field",
+                         ok=lambda v: v["serial"] == "TJV000004")
+    check(scanned["hint"] == "scanned TJV000004", f"the scanner says {scanned['hint']!r}")
+    driver.find_element(By.ID, "assign").click()
+    done = eventually(lambda: driver.execute_script(SETUP_JS), 20,
+                      "the gateway's answer to the assignment in the setup view",
+                      ok=lambda v: v["state"] not in (None, "sent", "chosen"))
+    check(done["state"] == "applied" and done["status"].startswith("section-04 on ")
+          and done["status"].endswith(": applied: TJV000004 sits there"),
+          f"the setup view's status: {done['status']!r} (state {done['state']})")
+    boom = eventually(lambda: driver.execute_script(BOOM_JS), 10,
+                      "section-04 holding its valve on the boom strip",
+                      ok=lambda b: dict(b).get("section-04") not in (None, "empty"))
+    placed = eventually(lambda: card(driver, "TJV000004"), 10, "TJV000004's card titled section-04",
+                        ok=lambda c: c["title"] == "section-04" and c["beneath"] == "TJV000004")
+    after = eventually(lambda: driver.execute_script(SETUP_JS), 10, "no valve left unassigned",
+                       ok=lambda v: v["unassigned"] == [])
+    with open(layout) as text:
+        saved = [line for line in text if "section-04" in line]
+    check(len(saved) == 1 and "TJV000004" in saved[0],
+          f"the gateway's layout file at section-04: {saved}")
+    path = os.path.join(artifacts, "web-setup.png")
+    check(driver.find_element(By.ID, "setup").screenshot(path), f"could not save {path}")
+    print(f"(k) setup view: scanned {scanned['serial']!r} from the camera, {done['status']!r}; "
+          f"boom {boom}, card {placed['title']}/{placed['beneath']}, "
+          f"unassigned {after['unassigned']}; layout file: {saved[0].strip()}; picture: {path}")
+
+
+def commanding_page(driver, artifacts, screenshot, layout):
     open_page(driver, COMMANDS_PORT)
     check(driver.find_elements(By.ID, "stop-all"), "the commanding page has no Stop all button")
     mode = driver.find_element(By.ID, "mode").text
@@ -209,6 +268,7 @@ def commanding_page(driver, artifacts, screenshot):
         shutil.copyfile(path, screenshot)
         print(f"(d) copied to {screenshot}")
     identify(driver)
+    setup_view(driver, layout, artifacts)
     return moved
 
 
@@ -407,13 +467,19 @@ class Restartable:
         return self.process.returncode
 
 
-def start_browser(work):
+def start_browser(work, camera_video=None, window="1400,1000"):
     options = webdriver.ChromeOptions()
     options.binary_location = shutil.which("chromium")
-    for argument in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
-                     "--window-size=1400,1000", "--disable-gpu", "--no-first-run",
-                     "--hide-scrollbars", f"--user-data-dir={os.path.join(work, 'chromium')}",
-                     f"--host-resolver-rules=MAP {REBOUND_NAME} 127.0.0.1"):
+    arguments = ["--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
+                 f"--window-size={window}", "--disable-gpu", "--no-first-run",
+                 "--hide-scrollbars", f"--user-data-dir={os.path.join(work, 'chromium')}",
+                 f"--host-resolver-rules=MAP {REBOUND_NAME} 127.0.0.1"]
+    if camera_video:
+        # The camera is a file (an absolute path: Chromium resolves a relative one against its
+        # own working directory), and no permission prompt is shown for it.
+        arguments += ["--use-fake-device-for-media-stream", "--use-fake-ui-for-media-stream",
+                      f"--use-file-for-fake-video-capture={os.path.abspath(camera_video)}"]
+    for argument in arguments:
         options.add_argument(argument)
     service = Service(shutil.which("chromedriver"), log_path=os.path.join(work, "chromedriver.log"))
     return webdriver.Chrome(service=service, options=options)
@@ -443,6 +509,12 @@ def main():
             return 77
 
     work = tempfile.mkdtemp(prefix="teejet-web-browser-")
+    camera_video = os.path.join(work, "valve-label.y4m")
+    try:
+        write_qr_video(QR_LABEL, camera_video, frames=2)
+    except QrencodeMissing as missing:
+        print(f"SKIP: {missing}")
+        return 77
     logs = {name: os.path.join(work, f"{name}.log") for name in ("gateway", "web", "web-ro", "web-token")}
     layout = os.path.join(work, "boom.yaml")
     with open(layout, "w") as text:
@@ -462,8 +534,8 @@ def main():
     try:
         wait_for_server(COMMANDS_PORT, commanding, 15)
         wait_for_server(READONLY_PORT, read_only, 15)
-        driver = start_browser(work)
-        commanding_page(driver, args.artifacts, args.screenshot)
+        driver = start_browser(work, camera_video)
+        commanding_page(driver, args.artifacts, args.screenshot, layout)
         rebinding(driver)
         framing(driver, work)
         read_only_page(driver)

@@ -19,6 +19,7 @@
   const identifying = new Map();
   const JOG_DEGREES = 10;
   let policy = null;           // {allowed, token_required} from the snapshot
+  let setup = null;            // the setup view (setup.js), with commands allowed only
   // What the valves tell and what commands take, from the codec's table (docs/web.md):
   // {commands: {move: {degrees: {min, max, step, unit}, ...}, request: {telemetry: [...]}},
   //  telemetry: {position: {degrees: {type, unit, step}}, current: {...}, ...}}.
@@ -127,9 +128,10 @@
       for (const s of message.statuses) showStatus(s);
       if ((message.places || []).length || message.valves.length) paintBoom();
     } else if (message.type === "sent") {
-      onSent(message);
+      if (setup && setup.onSent(message)) sentCommands.delete(message.id); else onSent(message);
     } else if (message.type === "refused") {
-      onRefused(message);
+      if (setup && setup.onRefused(message)) sentCommands.delete(message.id);
+      else onRefused(message);
     }
   }
 
@@ -207,6 +209,16 @@
            el("span", { class: "boom-state" }, state))));
     }
     for (const valve of valves.values()) titleCard(valve);
+    if (setup) setup.refresh(ordered, unassignedValves());
+  }
+
+  // Online valves in no place, while some gateway has a layout.
+  function unassignedValves() {
+    if (places.size === 0) return [];
+    return [...valves.values()].map((v) => v.data)
+      .filter((d) => d.online && !d.gateway_lost && !placeOf(d))
+      .sort((a, b) => (a.serial < b.serial ? -1 : 1))
+      .map((d) => ({ serial: d.serial, gateway: d.gateway, address: hexAddress(d.address) }));
   }
 
   // ---- valves --------------------------------------------------------------------------------
@@ -354,7 +366,16 @@
   function buildGlobalControls() {
     const box = $("global-commands");
     box.replaceChildren();
+    if (setup) setup.stopScan("");
+    setup = null;
+    $("setup").hidden = true;
+    $("setup").replaceChildren();
     if (!policy.allowed) return;
+    setup = new window.TeejetSetup($("setup"), { el, send: (command) => send(command, null) });
+    const setupToggle = el("button", { id: "setup-toggle", class: "cmd", type: "button",
+                                       title: "put valves at their places in the layout" }, "Setup");
+    setupToggle.addEventListener("click", () => { $("setup").hidden = !$("setup").hidden; });
+    box.append(setupToggle);
     if (policy.token_required) {
       box.append(el("label", {}, "token ",
                     el("input", { id: "token", class: "cmd", type: "password", size: 12 })));
@@ -480,11 +501,12 @@
     if (token) message.token = token.value;
     if (!socket || socket.readyState !== WebSocket.OPEN) {
       notice(`${command.command}: not connected to teejet-web`);
-      return;
+      return null;
     }
     sentCommands.set(id, serial);
     if (serial) setStatus(serial, "sent", `${command.command}: sent…`);
     socket.send(JSON.stringify(message));
+    return id;
   }
 
   function onSent(message) {
@@ -508,6 +530,10 @@
   }
 
   function showStatus(status) {
+    if (status.event === "layout_change") {
+      if (setup) setup.onStatus(status);
+      return;
+    }
     if (identifyHeard(status)) return;
     const reason = status.reason ? ` (${status.reason})` : "";
     setStatus(status.serial, status.state,
