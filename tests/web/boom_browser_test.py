@@ -20,7 +20,6 @@ Exit 77 (skipped) when chromium, chromedriver or python3-selenium is missing. Ev
 condition with a deadline; every failure says what differed.
 """
 
-import argparse
 import json
 import os
 import shutil
@@ -30,12 +29,12 @@ import tempfile
 import time
 
 # browser_test exits 77 without python3-selenium.
-from browser_test import BOOM_JS, By, check, Failure, start_browser, stop_processes
-from browser_test import wait_for_server
+from browser_test import BOOM_JS, By, browser_missing, check, drive, parse_arguments
+from browser_test import start_browser, wait_for_server
 from web_client import WebSocket
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
-from waiting import Timeout, eventually  # noqa: E402 (tests/support)
+from waiting import eventually  # noqa: E402 (tests/support)
 
 PORT = 18184
 
@@ -59,13 +58,13 @@ def right_layout():
     return "default: {closed_deg: 0, opened_deg: 90}\nlocations:\n" + "\n".join(places) + "\n"
 
 
-def start_gateway(work, name, layout, config, log):
+def start_gateway(gateway, work, name, layout, config, log):
     paths = {}
     for kind, text in (("layout", layout), ("config", config)):
         paths[kind] = os.path.join(work, f"{name}-{kind}.yaml")
         with open(paths[kind], "w") as out:
             out.write(text)
-    return subprocess.Popen([GATEWAY, "--can", "sim:32", "--name", name, "--layout", paths["layout"],
+    return subprocess.Popen([gateway, "--can", "sim:32", "--name", name, "--layout", paths["layout"],
                              "-c", paths["config"]],
                             stdout=open(log, "w"), stderr=subprocess.STDOUT)
 
@@ -148,35 +147,29 @@ def readable(driver, artifacts, size, name):
 
 
 def main():
-    global GATEWAY
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--gateway", required=True)
-    parser.add_argument("--web", required=True)
-    parser.add_argument("--artifacts", default=os.getcwd(),
-                        help="where the pictures are kept (default: the working directory)")
-    parser.add_argument("--screenshot", help="also copy the 32-place picture here (docs')")
-    args = parser.parse_args()
-    GATEWAY = args.gateway
-    for program in ("chromium", "chromedriver"):
-        if not shutil.which(program):
-            print(f"SKIP: {program} is not installed (tools/install-deps.sh)")
-            return 77
+    args = parse_arguments("also copy the 32-place picture here (docs/images/web-boom-32.png)")
+    missing = browser_missing()
+    if missing:
+        print(missing)
+        return 77
     work = tempfile.mkdtemp(prefix="teejet-web-boom-")
     logs = {name: os.path.join(work, f"{name}.log") for name in ("left", "right", "web")}
-    processes = [start_gateway(work, "left", left_layout(),
+    processes = [start_gateway(args.gateway, work, "left", left_layout(),
                                "simulator:\n  errors: [\"TJV000020:high-voltage:16.2:15.5\"]\n",
                                logs["left"])]
     web = subprocess.Popen([args.web, "--listen", f"127.0.0.1:{PORT}", "--allow-commands"],
                            stdout=open(logs["web"], "w"), stderr=subprocess.STDOUT)
     processes.append(web)
-    driver = None
     start = time.monotonic()
-    try:
+
+    def start_driver():
         wait_for_server(PORT, web, 15)
-        driver = start_browser(work)
+        return start_browser(work)
+
+    def steps(driver):
         driver.get(f"http://127.0.0.1:{PORT}/")
         every_state(driver, args.artifacts, args.screenshot)
-        processes.append(start_gateway(work, "right", right_layout(),
+        processes.append(start_gateway(args.gateway, work, "right", right_layout(),
                                        "simulator: {first_serial: TJV000101}\n", logs["right"]))
         cells = eventually(lambda: boom(driver), 30, "64 places in machine order",
                            ok=lambda b: len(b) == 64)
@@ -185,20 +178,10 @@ def main():
               and order[-1] == "right-master", f"the strip's order across the gateways: {order}")
         readable(driver, args.artifacts, (1366, 768), "laptop")
         readable(driver, args.artifacts, (390, 844), "phone")
-    except (Failure, Timeout) as failure:
-        print(f"FAIL: {failure}")
-        if driver:
-            path = os.path.join(args.artifacts, "web-boom-failure.png")
-            driver.save_screenshot(path)
-            print(f"page at the failure: {path}")
-        for name, path in logs.items():
-            if os.path.exists(path):
-                print(f"--- {name}.log\n{open(path).read()[-3000:]}")
+
+    if drive(start_driver, steps, processes, logs,
+             os.path.join(args.artifacts, "web-boom-failure.png")):
         return 1
-    finally:
-        if driver:
-            driver.quit()
-        stop_processes(reversed(processes))
     print(f"PASS in {time.monotonic() - start:.1f} s")
     return 0
 

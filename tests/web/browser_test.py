@@ -495,19 +495,54 @@ def stop_processes(processes):
             process.kill()
 
 
-def main():
+def parse_arguments(screenshot_help):
     parser = argparse.ArgumentParser()
     parser.add_argument("--gateway", required=True)
     parser.add_argument("--web", required=True)
     parser.add_argument("--artifacts", default=os.getcwd(),
-                        help="where web-dashboard.png is kept (default: the working directory)")
-    parser.add_argument("--screenshot", help="also copy the screenshot here (the README's)")
-    args = parser.parse_args()
+                        help="where the pictures are kept (default: the working directory)")
+    parser.add_argument("--screenshot", help=screenshot_help)
+    return parser.parse_args()
+
+
+def browser_missing():
+    """Why the page cannot be tested here (a SKIP line), or None."""
     for program in ("chromium", "chromedriver"):
         if not shutil.which(program):
-            print(f"SKIP: {program} is not installed (tools/install-deps.sh)")
-            return 77
+            return f"SKIP: {program} is not installed (tools/install-deps.sh)"
+    return None
 
+
+def drive(start_driver, steps, processes, logs, failure_picture):
+    """Runs steps(driver) on the browser start_driver() opens; on a failure prints it, a picture
+    of the page and the end of every log. Stops the browser and the processes either way. 0 when
+    the steps passed, 1 otherwise."""
+    driver = None
+    try:
+        driver = start_driver()
+        steps(driver)
+    except (Failure, Timeout) as failure:
+        print(f"FAIL: {failure}")
+        if driver:
+            driver.save_screenshot(failure_picture)
+            print(f"page at the failure: {failure_picture}")
+        for name, path in logs.items():
+            if os.path.exists(path):
+                print(f"--- {name}.log\n{open(path).read()[-3000:]}")
+        return 1
+    finally:
+        if driver:
+            driver.quit()
+        stop_processes(reversed(processes))
+    return 0
+
+
+def main():
+    args = parse_arguments("also copy the screenshot here (the README's)")
+    missing = browser_missing()
+    if missing:
+        print(missing)
+        return 77
     work = tempfile.mkdtemp(prefix="teejet-web-browser-")
     camera_video = os.path.join(work, "valve-label.y4m")
     try:
@@ -529,12 +564,14 @@ def main():
                                    "--allow-commands", "--token", TOKEN],
                                   stdout=open(logs["web-token"], "w"), stderr=subprocess.STDOUT)
     processes += [commanding, read_only, with_token]
-    driver = None
     start = time.monotonic()
-    try:
+
+    def start_driver():
         wait_for_server(COMMANDS_PORT, commanding, 15)
         wait_for_server(READONLY_PORT, read_only, 15)
-        driver = start_browser(work, camera_video)
+        return start_browser(work, camera_video)
+
+    def steps(driver):
         commanding_page(driver, args.artifacts, args.screenshot, layout)
         rebinding(driver)
         framing(driver, work)
@@ -542,19 +579,10 @@ def main():
         reconnects(driver, read_only)
         wait_for_server(TOKEN_PORT, with_token, 15)
         token_page(driver)
-    except (Failure, Timeout) as failure:
-        print(f"FAIL: {failure}")
-        if driver:
-            path = os.path.join(args.artifacts, "web-dashboard-failure.png")
-            driver.save_screenshot(path)
-            print(f"page at the failure: {path}")
-        for name, path in logs.items():
-            print(f"--- {name}.log\n{open(path).read()[-3000:]}")
+
+    if drive(start_driver, steps, processes, logs,
+             os.path.join(args.artifacts, "web-dashboard-failure.png")):
         return 1
-    finally:
-        if driver:
-            driver.quit()
-        stop_processes(reversed(processes))
     for process, name in ((commanding, "commanding"), (read_only, "read-only"),
                           (with_token, "token")):
         if process.returncode != 0:
