@@ -20,6 +20,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "teejet/core/result.hpp"
@@ -61,6 +62,25 @@ inline eprosima::fastrtps::Time_t to_dds_time(std::uint64_t unix_ns) {
 std::string participant_of(const eprosima::fastrtps::rtps::InstanceHandle_t& endpoint);
 std::string participant_text(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix);
 
+// A fastddsgen type whose keys are computed one at a time. fastddsgen 2.3's getKey() serializes
+// the key into a buffer of the type object and hashes it with an MD5 member, and a participant
+// has one type object per type for every writer and reader of its topic: a gateway publishing
+// its locations while its reader of the other gateways' locations filed one raced there (TSan,
+// CI), and two receive threads (shared memory and UDP) can race the same way, giving an instance
+// a wrong key.
+template <class PubSubType>
+class KeyLockedType final : public PubSubType {
+ public:
+  bool getKey(void* data, eprosima::fastrtps::rtps::InstanceHandle_t* handle,
+              bool force_md5) override {
+    std::lock_guard lock(key_mutex_);
+    return PubSubType::getKey(data, handle, force_md5);
+  }
+
+ private:
+  std::mutex key_mutex_;
+};
+
 class Participant {
  public:
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
@@ -72,7 +92,7 @@ class Participant {
   // <Type>PubSubType.
   template <class PubSubType>
   Result<eprosima::fastdds::dds::Topic*> topic(const std::string& name) {
-    return topic(name, eprosima::fastdds::dds::TypeSupport(new PubSubType()));
+    return topic(name, eprosima::fastdds::dds::TypeSupport(new KeyLockedType<PubSubType>()));
   }
 
   Result<eprosima::fastdds::dds::DataWriter*> writer(
