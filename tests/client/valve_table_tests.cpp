@@ -88,6 +88,21 @@ TEST(ValvectlTable, DirectoryWaitsForEveryGatewayThatAGatewaySaysItHears) {
   EXPECT_EQ(table.gateways()[0].participants, std::set<std::string>{"01.0f.aa"});
 }
 
+// Gateways started together have met only each other when a client meets the first two of
+// four: each says gateways_seen 2. Discovery has already told the client of four participants
+// announcing themselves as gateways.
+TEST(ValvectlTable, DirectoryWaitsForEveryParticipantThatAnnouncesItselfAGateway) {
+  ValveTable table = two_gateways(0, 0);
+  table.set_gateways_matched(2);
+  EXPECT_TRUE(table.directory_complete());
+  table.set_gateway_participants(4);
+  EXPECT_EQ(table.gateways_expected(), 4u);
+  EXPECT_FALSE(table.directory_complete());
+  table.on_gateway_status(gateway_status("c", 0), "01.0f.cc");
+  table.on_gateway_status(gateway_status("d", 0), "01.0f.dd");
+  EXPECT_TRUE(table.directory_complete());
+}
+
 TEST(ValvectlTable, AValveRowNamesTheParticipantThatPublishesIt) {
   ValveTable table;
   table.on_presence(presence(1, true, "a"), "01.0f.aa");

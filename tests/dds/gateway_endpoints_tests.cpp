@@ -171,6 +171,28 @@ TEST(Participant, AProfileClashingWithTheEnvironmentsIsRefusedNotIgnored) {
   std::remove(copy.c_str());
 }
 
+// A client learns that a participant is a gateway from discovery alone, before any of its
+// topics match, and forgets it when it leaves.
+TEST(Participant, ARoleIsAnnouncedInDiscoveryAndForgottenWhenTheParticipantLeaves) {
+  auto client = Participant::create({.domain = test_domain(), .name = "client"});
+  auto gateway = Participant::create({.domain = test_domain(), .name = "gw", .role = kGatewayRole});
+  auto other = Participant::create({.domain = test_domain(), .name = "other", .role = "recorder"});
+  ASSERT_TRUE(client && gateway && other);
+  const std::string gateway_prefix = participant_text((*gateway)->get()->guid().guidPrefix);
+  const std::string other_prefix = participant_text((*other)->get()->guid().guidPrefix);
+  ASSERT_TRUE(eventually(
+      [&] {
+        return (*client)->participants_with_role(kGatewayRole) ==
+                   std::set<std::string>{gateway_prefix} &&
+               (*client)->participants_with_role("recorder") == std::set<std::string>{other_prefix};
+      },
+      10s));
+  gateway->reset();
+  EXPECT_TRUE(
+      eventually([&] { return (*client)->participants_with_role(kGatewayRole).empty(); }, 10s));
+  EXPECT_EQ((*client)->participants_with_role("recorder"), std::set<std::string>{other_prefix});
+}
+
 TEST_F(GatewayEndpointsTest, LateJoinerSeesEveryValvePresenceAtOnce) {
   publisher->presence(presence(1, 0xD8));
   publisher->presence(presence(2, 0xD9));

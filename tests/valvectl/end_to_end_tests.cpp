@@ -242,6 +242,25 @@ TEST_F(ValvectlEndToEnd, UnknownSerialExits2WithoutWaitingTheWholeTimeout) {
   EXPECT_EQ(commands_ignored(), ignored_before);
 }
 
+// A gateway whose participant discovery has met but whose topics have not matched yet (here: a
+// participant announcing itself as a gateway that never publishes) holds the verdict: valvectl
+// does not call a valve unknown on the word of the gateways it has heard so far.
+TEST_F(ValvectlEndToEnd, AGatewayMetButNotYetHeardKeepsAValveFromBeingCalledUnknown) {
+  auto starting = dds::Participant::create(
+      {.domain = test_domain(), .name = "starting-gateway", .role = dds::kGatewayRole});
+  ASSERT_TRUE(starting);
+  const auto waited = valvectl({"--timeout", "2", "move", "123", "--to", "10"});
+  EXPECT_EQ(waited.exit_code, kExitNotFound) << describe(waited);
+  EXPECT_TRUE(contains(waited.err, "valve TJV000123 was not found within 2 s on domain " +
+                                       domain_text() + ": met 1 of 2 gateway(s)"))
+      << describe(waited);
+  starting->reset();
+  const auto unknown = valvectl({"--timeout", "3600", "move", "123", "--to", "10"});
+  EXPECT_FALSE(unknown.timed_out) << "valvectl waited for its --timeout";
+  EXPECT_TRUE(contains(unknown.err, "is not known to any of the 1 gateway(s)"))
+      << describe(unknown);
+}
+
 TEST_F(ValvectlEndToEnd, NoGatewayOnTheDomainExits2) {
   const std::string empty_domain = std::to_string(teejet::testing::another_test_domain());
   const auto listed = run({VALVECTL_PATH, "--domain", empty_domain, "--timeout", "1", "list"});

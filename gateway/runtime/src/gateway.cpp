@@ -88,6 +88,7 @@ Status Gateway::start() {
       {.domain = config_.domain,
        .profile_file = config_.profile_file,
        .name = config_.bridge.gateway_name,
+       .role = dds::kGatewayRole,
        .on_participant_dropped = [lost = lost_commanders_](const std::string& prefix) {
          lost->report(prefix);
        }});

@@ -205,7 +205,7 @@ std::size_t ValveTable::online_count() const {
 }
 
 std::size_t ValveTable::gateways_expected() const {
-  std::size_t expected = std::max<std::size_t>(gateways_matched_, 1);
+  std::size_t expected = std::max<std::size_t>({gateways_matched_, gateway_participants_, 1});
   for (const auto& [name, summary] : gateways_) {
     expected = std::max<std::size_t>(expected, summary.gateways_seen);
   }

@@ -175,8 +175,10 @@ void ValveView::update_gateways_matched() const {
   if (gateway_status_reader_->get_subscription_matched_status(matched) != ReturnCode::RETCODE_OK) {
     return;
   }
+  const std::size_t announced = participant_.participants_with_role(dds::kGatewayRole).size();
   std::lock_guard lock(mutex_);
   table_.set_gateways_matched(static_cast<std::size_t>(matched.current_count));
+  table_.set_gateway_participants(announced);
 }
 
 bool ValveView::wait_until(const Condition& condition, Deadline until,

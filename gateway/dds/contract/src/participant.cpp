@@ -30,13 +30,37 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
   void on_participant_discovery(
       DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
     using Status = eprosima::fastrtps::rtps::ParticipantDiscoveryInfo;
-    if (info.status == Status::DROPPED_PARTICIPANT) {
-      on_dropped_(participant_text(info.info.m_guid.guidPrefix));
+    const std::string participant = participant_text(info.info.m_guid.guidPrefix);
+    if (info.status == Status::DISCOVERED_PARTICIPANT ||
+        info.status == Status::CHANGED_QOS_PARTICIPANT) {
+      std::string role;
+      for (const auto& property : info.info.m_properties) {
+        if (property.first() == kRoleProperty) role = property.second();
+      }
+      std::lock_guard lock(mutex_);
+      roles_[participant] = role;
+      return;
     }
+    {
+      std::lock_guard lock(mutex_);
+      roles_.erase(participant);
+    }
+    if (info.status == Status::DROPPED_PARTICIPANT && on_dropped_) on_dropped_(participant);
+  }
+
+  std::set<std::string> with_role(std::string_view role) const {
+    std::lock_guard lock(mutex_);
+    std::set<std::string> found;
+    for (const auto& [participant, announced] : roles_) {
+      if (announced == role) found.insert(participant);
+    }
+    return found;
   }
 
  private:
   std::function<void(const std::string&)> on_dropped_;
+  mutable std::mutex mutex_;
+  std::map<std::string, std::string> roles_;  // every remote participant alive, by GUID prefix
 };
 
 namespace {
@@ -149,10 +173,12 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   if (auto loaded = load_profiles_once(options.profile_file); !loaded) return loaded.error();
   DomainParticipantQos qos = factory->get_default_participant_qos();
   qos.name(options.name);
-  std::unique_ptr<Participant> made(new Participant());
-  if (options.on_participant_dropped) {
-    made->discovery_listener_ = std::make_unique<DiscoveryListener>(options.on_participant_dropped);
+  if (!options.role.empty()) {
+    // Propagated: sent in the participant's discovery data, where any participant reads it.
+    qos.properties().properties().emplace_back(kRoleProperty, options.role, true);
   }
+  std::unique_ptr<Participant> made(new Participant());
+  made->discovery_listener_ = std::make_unique<DiscoveryListener>(options.on_participant_dropped);
   // Discovery callbacks ignore the mask; StatusMask::none() keeps the participant listener
   // from taking the readers' data-available callbacks.
   made->participant_ =
@@ -169,6 +195,10 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
     return refused("cannot create a DDS publisher or subscriber");
   }
   return made;
+}
+
+std::set<std::string> Participant::participants_with_role(std::string_view role) const {
+  return discovery_listener_->with_role(role);
 }
 
 Participant::~Participant() {

@@ -116,9 +116,14 @@ class ValveTable {
   // How many gateways discovery has found so far (writers of gateway status matched).
   void set_gateways_matched(std::size_t count) { gateways_matched_ = count; }
   std::size_t gateways_matched() const { return gateways_matched_; }
+  // How many participants discovery has found that announce themselves as gateways
+  // (dds::kGatewayRole), whether or not their topics have matched yet.
+  void set_gateway_participants(std::size_t count) { gateway_participants_ = count; }
 
-  // How many gateways there are to meet: the most that discovery has matched or that any
-  // gateway met says it hears on the domain (gateways_seen).
+  // How many gateways there are to meet: the most that discovery has matched, that announce
+  // themselves as gateways, or that any gateway met says it hears on the domain (gateways_seen).
+  // A participant is met in a few milliseconds, its topics a discovery round-trip later: until
+  // then the gateways already matched may know no more than each other.
   std::size_t gateways_expected() const;
   // Whether the directory is all here: every gateway expected (at least one) has reported its
   // status, and each has published presence for as many valves, and as many places of its
@@ -154,6 +159,7 @@ class ValveTable {
   std::map<std::string, GatewaySummary> gateways_;
   std::map<std::pair<std::string, std::string>, LocationRow> locations_;  // by (name, gateway)
   std::size_t gateways_matched_ = 0;
+  std::size_t gateway_participants_ = 0;
   std::set<std::string> lost_participants_;
 };
 

@@ -21,7 +21,9 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
+#include <string_view>
 
 #include "teejet/core/result.hpp"
 
@@ -34,6 +36,10 @@ struct ParticipantOptions {
   int domain = 0;
   std::string profile_file;  // Fast DDS XML profiles, loaded before any default QoS is read
   std::string name = "teejet";
+  // What this participant is to the others ("gateway"), announced with it in discovery
+  // (participant property teejet.role), so that a client that met a gateway's participant
+  // waits for its topics instead of judging the domain without it. Empty: none announced.
+  std::string role;
   // Called with a remote participant's GUID prefix ("01.0f.…") when its lease expired: the
   // process died or became unreachable. A participant that leaves in order is not reported.
   // Runs on a Fast DDS thread: hand the news to a thread of your own.
@@ -81,9 +87,15 @@ class KeyLockedType final : public PubSubType {
   std::mutex key_mutex_;
 };
 
+// The participant property that carries ParticipantOptions::role.
+inline constexpr const char* kRoleProperty = "teejet.role";
+inline constexpr const char* kGatewayRole = "gateway";
+
 class Participant {
  public:
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
+  // The remote participants discovery found, alive and announcing `role`, as GUID prefixes.
+  std::set<std::string> participants_with_role(std::string_view role) const;
   ~Participant();  // deletes every entity made here, then the participant
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
