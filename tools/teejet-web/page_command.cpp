@@ -72,6 +72,29 @@ Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& 
   return *serial;
 }
 
+// Whether `message` of command `name` has every `required` field and no field but those, the
+// `optional` ones, "command", "id" and "token"; the refusal says which field.
+Status known_fields(const std::string& name, const json& message,
+                    const std::vector<std::string_view>& required,
+                    const std::vector<std::string_view>& optional) {
+  const auto among = [](const std::vector<std::string_view>& names, std::string_view key) {
+    return std::find(names.begin(), names.end(), key) != names.end();
+  };
+  for (const auto& item : message.items()) {
+    const std::string& key = item.key();
+    if (key == "command" || key == "id" || key == "token") continue;
+    if (!among(required, key) && !among(optional, key)) {
+      return refused(name + ": unknown field \"" + key + "\"");
+    }
+  }
+  for (const std::string_view field : required) {
+    if (!message.contains(std::string(field))) {
+      return refused(name + ": missing \"" + std::string(field) + "\"");
+    }
+  }
+  return {};
+}
+
 // The one place called `value` among the gateways' layouts: two gateways claiming a name is a
 // mistake of their layouts, and a change or command sent to either could be the wrong one.
 Result<client::LocationRow> the_place(const json& value, const client::ValveTable& table) {
@@ -81,10 +104,8 @@ Result<client::LocationRow> the_place(const json& value, const client::ValveTabl
   if (places.empty())
     return refused("unknown location \"" + name + "\": no gateway's layout has it");
   if (places.size() > 1) {
-    std::string gateways;
-    for (const auto& place : places) gateways += (gateways.empty() ? "" : ", ") + place.gateway;
     return refused("location \"" + name + "\" is in the layouts of " +
-                   std::to_string(places.size()) + " gateways (" + gateways +
+                   std::to_string(places.size()) + " gateways (" + client::gateway_names(places) +
                    "): a name belongs to one");
   }
   return places.front();
@@ -224,20 +245,12 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
   if (by_location && message.contains("serial")) {
     return refused(name + ": name the valve by \"serial\" or by \"location\", not both");
   }
-  const auto fields = fields_of(*shape);
-  for (const auto& [key, value] : message.items()) {
-    if (key == "command" || key == "id" || key == "token" || (by_location && key == "location")) {
-      continue;
-    }
-    if (std::find(fields.begin(), fields.end(), key) == fields.end()) {
-      return refused(name + ": unknown field \"" + key + "\"");
-    }
-  }
-  for (const std::string_view field : fields) {
-    if (by_location && field == "serial") continue;
-    if (!message.contains(std::string(field))) {
-      return refused(name + ": missing \"" + std::string(field) + "\"");
-    }
+  auto fields = fields_of(*shape);
+  if (by_location)
+    std::replace(fields.begin(), fields.end(), std::string_view("serial"),
+                 std::string_view("location"));
+  if (const auto checked_fields = known_fields(name, message, fields, {}); !checked_fields) {
+    return checked_fields.error();
   }
 
   PageCommand checked;
@@ -269,40 +282,28 @@ Result<PageLayoutChange> check_page_layout_change(const json& message,
   if (shape == kLayoutShapes.end()) {
     return refused("unknown layout change \"" + name + "\": assign or unassign");
   }
-  const auto among = [](const std::vector<std::string_view>& names, std::string_view key) {
-    return std::find(names.begin(), names.end(), key) != names.end();
-  };
-  for (const auto& item : message.items()) {
-    const std::string& key = item.key();
-    if (key == "command" || key == "id" || key == "token") continue;
-    if (!among(shape->fields, key) && !among(shape->optional_fields, key)) {
-      return refused(name + ": unknown field \"" + key + "\"");
-    }
-  }
-  for (const std::string_view field : shape->fields) {
-    if (!message.contains(std::string(field))) {
-      return refused(name + ": missing \"" + std::string(field) + "\"");
-    }
+  if (const auto checked_fields =
+          known_fields(name, message, shape->fields, shape->optional_fields);
+      !checked_fields) {
+    return checked_fields.error();
   }
   const auto place = the_place(message.at("location"), table);
   if (!place) return refused(name + ": " + place.error().reason);
-  PageLayoutChange checked;
-  checked.participant = place->participant;
-  checked.change.location(place->name);
-  checked.change.gateway(place->gateway);
-  checked.change.kind(shape->kind);
+  std::uint32_t serial = 0;
+  bool move = false;
   if (shape->kind == LAYOUT_ASSIGN) {
-    const json& serial = message.at("serial");
-    if (!serial.is_string()) return refused(name + ": serial must be a string like \"TJV000001\"");
-    const auto parsed = codec::parse_serial(serial.get<std::string>());
+    const json& given = message.at("serial");
+    if (!given.is_string()) return refused(name + ": serial must be a string like \"TJV000001\"");
+    const auto parsed = codec::parse_serial(given.get<std::string>());
     if (!parsed) return refused(name + ": invalid serial: " + parsed.error().reason);
-    checked.change.serial(*parsed);
+    serial = *parsed;
     if (message.contains("move")) {
       if (!message.at("move").is_boolean()) return refused(name + ": move must be true or false");
-      checked.change.move(message.at("move").get<bool>());
+      move = message.at("move").get<bool>();
     }
   }
-  return checked;
+  return PageLayoutChange{client::layout_change_of(*place, shape->kind, serial, move),
+                          place->participant};
 }
 
 namespace {

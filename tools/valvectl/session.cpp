@@ -220,10 +220,8 @@ class Session {
       return kExitNotFound;
     }
     if (places.size() > 1) {
-      std::string gateways;
-      for (const auto& place : places) gateways += (gateways.empty() ? "" : ", ") + place.gateway;
       complain("location '" + name + "' is in the layouts of " + std::to_string(places.size()) +
-               " gateways (" + gateways +
+               " gateways (" + gateway_names(places) +
                "): a name belongs to one; rename it in all but one layout. Nothing was sent");
       return kExitRejected;
     }
@@ -243,13 +241,8 @@ class Session {
     });
     if (const int* exit_code = std::get_if<int>(&made)) return *exit_code;
     LayoutClient& client = *std::get<std::unique_ptr<LayoutClient>>(made);
-    LayoutChange change;
-    change.location(request.location);
-    change.gateway(place.gateway);
-    change.kind(request.kind);
-    change.serial(request.serial);
-    change.move(request.move);
-    const auto id = client.send(change);
+    const auto id =
+        client.send(layout_change_of(place, request.kind, request.serial, request.move));
     if (!id) {
       complain("could not write the layout change");
       return kExitFailure;

@@ -438,24 +438,21 @@ Result<std::pair<layout::Layout, std::string>> Bridge::changed_layout(
   return std::pair{std::move(next), what};
 }
 
+// Only what the change touched: the presence of each valve that came or went (which publishes
+// its new place too), and the changed places no presence publishes (emptied, or holding a valve
+// never heard).
 void Bridge::publish_layout_moves(const layout::Layout& before) {
   std::set<std::uint32_t> moved;
   for (const auto& place : layout_.locations()) {
     const auto* was = before.find(place.name);
-    if (was == nullptr || was->serial == place.serial) continue;
-    if (was->serial) moved.insert(*was->serial);
+    if (was != nullptr && was->serial == place.serial) continue;
+    if (was != nullptr && was->serial) moved.insert(*was->serial);
     if (place.serial) moved.insert(*place.serial);
+    if (!place.serial || !directory_.find(*place.serial)) publish_location(place, false);
   }
   for (const std::uint32_t serial : moved) {
     reported_unassigned_.erase(serial);  // said again if it sits nowhere now
-    if (const auto valve = directory_.find(serial)) {
-      publish_presence(*valve);
-    }
-  }
-  // Places of valves never heard, and emptied places, have no presence to publish them.
-  for (const auto& place : layout_.locations()) {
-    const auto valve = place.serial ? directory_.find(*place.serial) : std::nullopt;
-    publish_location(place, valve && valve->online);
+    if (const auto valve = directory_.find(serial)) publish_presence(*valve);
   }
 }
 

@@ -232,6 +232,23 @@ bool ValveTable::directory_complete() const {
   return true;
 }
 
+std::string gateway_names(const std::vector<LocationRow>& places) {
+  std::string names;
+  for (const auto& place : places) names += (names.empty() ? "" : ", ") + place.gateway;
+  return names;
+}
+
+LayoutChange layout_change_of(const LocationRow& place, LayoutChangeKind kind, std::uint32_t serial,
+                              bool move) {
+  LayoutChange change;
+  change.location(place.name);
+  change.gateway(place.gateway);
+  change.kind(kind);
+  change.serial(serial);
+  change.move(move);
+  return change;
+}
+
 bool ValveTable::telemetry_complete() const {
   return std::all_of(rows_.begin(), rows_.end(), [this](const auto& item) {
     const ValveRow row = shown(item.second);

@@ -87,6 +87,13 @@ struct LocationRow {
   bool gateway_lost = false;  // its gateway vanished: the state is the last word
 };
 
+// "a, b": the gateways whose layouts hold `places` (several when two claim one name).
+std::string gateway_names(const std::vector<LocationRow>& places);
+// A change of `place` for the gateway whose layout holds it: LAYOUT_ASSIGN puts `serial` there
+// (taken from the place it sits at when `move`), LAYOUT_UNASSIGN leaves it empty.
+LayoutChange layout_change_of(const LocationRow& place, LayoutChangeKind kind,
+                              std::uint32_t serial = 0, bool move = false);
+
 class ValveTable {
  public:
   // `participant` is the publishing participant's GUID prefix (dds::participant_of).
