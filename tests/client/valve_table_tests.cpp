@@ -65,6 +65,8 @@ TEST(ValvectlTable, DirectoryIsCompleteWhenEveryMatchedGatewayHasToldAllItKnows)
   EXPECT_FALSE(table.directory_complete());
   table.on_gateway_status(gateway_status("b", 0));
   EXPECT_TRUE(table.directory_complete());
+  table.set_discovery_settled(false);  // a participant met just now may be a third gateway
+  EXPECT_FALSE(table.directory_complete());
 }
 
 // Discovery finds gateways one by one: a client that has met one of eight must not judge the

@@ -213,7 +213,7 @@ std::size_t ValveTable::gateways_expected() const {
 }
 
 bool ValveTable::directory_complete() const {
-  if (gateways_.size() < gateways_expected()) return false;
+  if (!discovery_settled_ || gateways_.size() < gateways_expected()) return false;
   for (const auto& [name, summary] : gateways_) {
     // Captured by name: clang before 16 cannot capture a structured binding.
     const auto known =

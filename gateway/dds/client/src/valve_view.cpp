@@ -176,9 +176,11 @@ void ValveView::update_gateways_matched() const {
     return;
   }
   const std::size_t announced = participant_.participants_with_role(dds::kGatewayRole).size();
+  const bool settled = participant_.discovery_settled();
   std::lock_guard lock(mutex_);
   table_.set_gateways_matched(static_cast<std::size_t>(matched.current_count));
   table_.set_gateway_participants(announced);
+  table_.set_discovery_settled(settled);
 }
 
 bool ValveView::wait_until(const Condition& condition, Deadline until,

@@ -3,6 +3,7 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -39,6 +40,9 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
       }
       std::lock_guard lock(mutex_);
       roles_[participant] = role;
+      if (info.status == Status::DISCOVERED_PARTICIPANT) {
+        last_discovered_ = std::chrono::steady_clock::now();
+      }
       return;
     }
     {
@@ -46,6 +50,11 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
       roles_.erase(participant);
     }
     if (info.status == Status::DROPPED_PARTICIPANT && on_dropped_) on_dropped_(participant);
+  }
+
+  std::chrono::steady_clock::time_point last_discovered() const {
+    std::lock_guard lock(mutex_);
+    return last_discovered_;
   }
 
   std::set<std::string> with_role(std::string_view role) const {
@@ -61,6 +70,7 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
   std::function<void(const std::string&)> on_dropped_;
   mutable std::mutex mutex_;
   std::map<std::string, std::string> roles_;  // every remote participant alive, by GUID prefix
+  std::chrono::steady_clock::time_point last_discovered_ = std::chrono::steady_clock::now();
 };
 
 namespace {
@@ -199,6 +209,16 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
 
 std::set<std::string> Participant::participants_with_role(std::string_view role) const {
   return discovery_listener_->with_role(role);
+}
+
+bool Participant::discovery_settled() const {
+  const auto& discovery = participant_->get_qos().wire_protocol().builtin.discovery_config;
+  const auto& period = discovery.leaseDuration_announcementperiod;
+  const auto announcement =
+      std::chrono::seconds(period.seconds) + std::chrono::nanoseconds(period.nanosec);
+  const auto quiet =
+      std::min<std::chrono::steady_clock::duration>(2 * announcement, std::chrono::seconds(1));
+  return std::chrono::steady_clock::now() - discovery_listener_->last_discovered() >= quiet;
 }
 
 Participant::~Participant() {

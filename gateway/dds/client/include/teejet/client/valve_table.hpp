@@ -126,16 +126,19 @@ class ValveTable {
   // How many participants discovery has found that announce themselves as gateways
   // (dds::kGatewayRole), whether or not their topics have matched yet.
   void set_gateway_participants(std::size_t count) { gateway_participants_ = count; }
+  // Whether discovery has gone quiet (dds::Participant::discovery_settled): until it has, a
+  // gateway not met yet may still answer. A table filled by hand has nothing more to meet.
+  void set_discovery_settled(bool settled) { discovery_settled_ = settled; }
 
   // How many gateways there are to meet: the most that discovery has matched, that announce
   // themselves as gateways, or that any gateway met says it hears on the domain (gateways_seen).
   // A participant is met in a few milliseconds, its topics a discovery round-trip later: until
   // then the gateways already matched may know no more than each other.
   std::size_t gateways_expected() const;
-  // Whether the directory is all here: every gateway expected (at least one) has reported its
-  // status, and each has published presence for as many valves, and as many places of its
-  // layout, as it says it knows. Presence, places and gateway status are durable, so this holds
-  // shortly after discovery.
+  // Whether the directory is all here: discovery has settled, every gateway expected (at least
+  // one) has reported its status, and each has published presence for as many valves, and as
+  // many places of its layout, as it says it knows. Presence, places and gateway status are
+  // durable, so this holds shortly after discovery.
   bool directory_complete() const;
   // Whether every online valve has reported position, temperature and voltage.
   bool telemetry_complete() const;
@@ -167,6 +170,7 @@ class ValveTable {
   std::map<std::pair<std::string, std::string>, LocationRow> locations_;  // by (name, gateway)
   std::size_t gateways_matched_ = 0;
   std::size_t gateway_participants_ = 0;
+  bool discovery_settled_ = true;
   std::set<std::string> lost_participants_;
 };
 

@@ -96,6 +96,11 @@ class Participant {
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
   // The remote participants discovery found, alive and announcing `role`, as GUID prefixes.
   std::set<std::string> participants_with_role(std::string_view role) const;
+  // Whether discovery has gone quiet: no participant new to this one since it was made or for
+  // two of its announcement periods (at most 1 s). A participant already running may answer a
+  // newcomer only at its next periodic announcement (the loopback profile's 250 ms), so until
+  // then the participants met so far need not be all there are.
+  bool discovery_settled() const;
   ~Participant();  // deletes every entity made here, then the participant
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
