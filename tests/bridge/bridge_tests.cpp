@@ -37,6 +37,7 @@ class BridgeTest : public ::testing::Test {
     BridgeConfig c;
     c.gateway_name = "gw-test";
     c.can_interface = "virtual:" + bus_name;
+    c.isobus.claim = false;  // the valves' side here; claiming has tests of its own
     return c;
   }
 

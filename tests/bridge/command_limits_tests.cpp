@@ -31,6 +31,7 @@ class CommandLimits : public ::testing::Test {
     BridgeConfig c;
     c.can_interface = "virtual:" + bus_name;
     c.poll.clear();  // only the commands' frames on the wire
+    c.isobus.claim = false;
     return c;
   }
 

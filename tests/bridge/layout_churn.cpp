@@ -47,6 +47,7 @@ int main(int argc, char** argv) {
   }
   bridge::BridgeConfig config;
   config.gateway_name = "churn";
+  config.isobus.claim = false;
   config.layout = *start;
   can::VirtualBus bus("layout-churn", {.filters = can::controller_side_filters()});
   if (!bus.open()) return 1;

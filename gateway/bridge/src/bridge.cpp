@@ -8,6 +8,7 @@
 #include "command_rate_limiter.hpp"
 #include "command_tracker.hpp"
 #include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
 
 namespace teejet::bridge {
 namespace {
@@ -18,6 +19,16 @@ using namespace std::chrono_literals;
 constexpr Duration kStatusPeriod = 1s;
 // GatewayStatus.serials_online's bound (idl/teejet/valve.idl): two valves at each address.
 constexpr std::size_t kMaxSerialsOnline = 64;
+// Commands held during the 250 ms after an address claim; beyond, REJECTED with the reason.
+constexpr std::size_t kMaxDeferredCommands = 256;
+// The identifier bits that make a frame one from a valve to the controller (0x18EFD5xx, any
+// priority): PGN 0xEF00 to 0xD5. Everything else the filters let in is the claimer's.
+constexpr std::uint32_t kValveFrameMask = 0x03FFFF00;
+constexpr std::uint32_t kValveFrameBits = codec::from_valve_id(0) & kValveFrameMask;
+
+bool cut_off(can::BusState state) {
+  return state == can::BusState::kBusOff || state == can::BusState::kDown;
+}
 
 teejet::BusState to_idl(can::BusState state) {
   switch (state) {
@@ -94,9 +105,15 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
       tracker_(std::make_unique<CommandTracker>(config_, layout_)),
       limiter_(std::make_unique<CommandRateLimiter>(config_.command_rate_per_valve,
                                                     config_.command_burst_per_valve)),
-      next_status_(clock_->steady() + kStatusPeriod) {
+      next_status_(clock_->steady() + kStatusPeriod),
+      claimer_(config_.isobus) {
   // Every place at once, so that an ECU resolves every name before the first valve announces.
   for (const auto& place : layout_.locations()) publish_location(place, false);
+  const auto statistics = bus_.statistics();
+  bus_state_seen_ = statistics.state;
+  reopens_seen_ = statistics.reopens;
+  std::lock_guard lock(mutex_);
+  apply(claimer_.claim(clock_->steady()));
 }
 
 Bridge::~Bridge() = default;
@@ -114,6 +131,17 @@ void Bridge::on_frames(std::span<const can::TimedFrame> frames) {
 }
 
 void Bridge::handle_frame(const can::TimedFrame& frame) {
+  const codec::CanFrame& raw = frame.frame;
+  if (!raw.extended || (raw.id & kValveFrameMask) != kValveFrameBits) {
+    apply(claimer_.on_frame(raw, frame.received, clock_->steady()));
+    return;
+  }
+  // Valves never claim: what an ECU that claimed this address sends is not a valve's.
+  if (claimer_.claimed_by_neighbour(static_cast<std::uint8_t>(raw.id))) {
+    ++counters_.neighbour_frames;
+    apply(claimer_.on_frame(raw, frame.received, clock_->steady()));  // seen, not a valve
+    return;
+  }
   const auto decoded = codec::decode(frame.frame);
   if (!decoded) {
     ++counters_.decode_errors;
@@ -244,6 +272,10 @@ std::vector<Bridge::ResentPoll> Bridge::resent_polls_of(
 }
 
 void Bridge::arm_polling(const directory::ValveRecord& valve) {
+  if (!claimer_.may_send()) {
+    polls_withheld_.insert(valve.serial);  // polled once the address is held
+    return;
+  }
   for (const auto& request : config_.poll) (void)send(valve.address, request);
   auto& awaited = awaited_[valve.serial];
   awaited.clear();
@@ -270,6 +302,7 @@ std::vector<const Bridge::ResentPoll*> Bridge::quiet_polls(const directory::Valv
 
 void Bridge::poll_again(const directory::ValveRecord& valve,
                         const std::vector<const ResentPoll*>& polls) {
+  if (!claimer_.may_send()) return;
   std::string subjects;
   auto& awaited = awaited_[valve.serial];
   for (const auto* poll : polls) {
@@ -484,6 +517,16 @@ struct Bridge::CommandUnderCheck {
 
 void Bridge::on_command(const ValveCommand& command, const std::string& commander) {
   std::lock_guard lock(mutex_);
+  take_command(command, commander);
+}
+
+void Bridge::take_command(const ValveCommand& command, const std::string& commander) {
+  if (claimer_.state() == isobus::ClaimState::kClaiming &&
+      deferred_.size() < kMaxDeferredCommands && directory_.find(command.serial())) {
+    // Taken again when the wait after the claim ends (Bridge::apply): a quarter second at most.
+    deferred_.push_back({command, commander});
+    return;
+  }
   // Stamped before it is sent: a reply can arrive before this function returns, and a client
   // tells a fresh reply from an old one by comparing it with the ACCEPTED stamp.
   const Timestamp taken = clock_->wall();
@@ -495,11 +538,17 @@ void Bridge::on_command(const ValveCommand& command, const std::string& commande
   // In this order; the first reason ends the command REJECTED. Stop passes the boot-code check
   // and has a rate bucket of its own, so that a stop is never refused when it can be sent.
   static constexpr std::array kChecks{
-      &Bridge::refuse_unknown_serial, &Bridge::refuse_offline,
-      &Bridge::refuse_contested,      &Bridge::refuse_online_elsewhere,
-      &Bridge::refuse_baud_change,    &Bridge::translate,
-      &Bridge::refuse_in_boot_code,   &Bridge::encode_frame,
-      &Bridge::refuse_over_rate,      &Bridge::send_frame,
+      &Bridge::refuse_unknown_serial,
+      &Bridge::refuse_without_address,
+      &Bridge::refuse_offline,
+      &Bridge::refuse_contested,
+      &Bridge::refuse_online_elsewhere,
+      &Bridge::refuse_baud_change,
+      &Bridge::translate,
+      &Bridge::refuse_in_boot_code,
+      &Bridge::encode_frame,
+      &Bridge::refuse_over_rate,
+      &Bridge::send_frame,
   };
   for (const auto refusal_of : kChecks) {
     if (const auto reason = (this->*refusal_of)(check)) {
@@ -515,6 +564,10 @@ std::optional<std::string> Bridge::refuse_unknown_serial(CommandUnderCheck& chec
   if (check.valve) return std::nullopt;
   return "no valve " + codec::format_serial(check.command.serial()) + " on this gateway's bus (" +
          config_.can_interface + ")";
+}
+
+std::optional<std::string> Bridge::refuse_without_address(CommandUnderCheck& /*check*/) {
+  return claimer_.refusal();
 }
 
 std::optional<std::string> Bridge::refuse_offline(CommandUnderCheck& check) {
@@ -616,7 +669,12 @@ std::string Bridge::unreachable_reason(const directory::ValveRecord& valve) cons
   return "valve " + serial + " is offline";
 }
 
-Status Bridge::send(std::uint8_t address, const codec::ToValveMessage& message) {
+Status Bridge::send(std::uint8_t address, const codec::ToValveMessage& message,
+                    bool even_while_claiming) {
+  if (!claimer_.may_send() &&
+      !(even_while_claiming && claimer_.state() == isobus::ClaimState::kClaiming)) {
+    return Error{ErrorCode::kUnavailable, claimer_.refusal().value_or("")};
+  }
   const auto frame = codec::encode(address, message);
   if (!frame) return frame.error();
   return bus_.send(*frame);
@@ -652,6 +710,8 @@ void Bridge::settle(const Outcome& outcome) {
 void Bridge::tick() {
   std::lock_guard lock(mutex_);
   const SteadyTime now = clock_->steady();
+  reclaim_after_recovery(now);
+  apply(claimer_.tick(now));
   Outcome outcome;
   for (const auto& change : directory_.expire(now)) {
     if (change.kind == directory::ChangeKind::kConflictCleared) {
@@ -700,6 +760,7 @@ SteadyTime Bridge::earliest_command_deadline() const {
 
 SteadyTime Bridge::earliest_deadline() const {
   SteadyTime next = earliest_command_deadline();
+  if (const auto claiming = claimer_.next_deadline()) next = std::min(next, *claiming);
   if (const auto expiry = directory_.next_expiry()) {
     // Expiry is "older than the timeout": the first instant it is due is one tick later.
     next = std::min(next, *expiry + Duration{1});
@@ -730,6 +791,21 @@ void Bridge::publish_gateway_status() {
   if (online.size() > kMaxSerialsOnline) online.resize(kMaxSerialsOnline);
   status.serials_online(std::move(online));
   status.locations_known(static_cast<std::uint32_t>(layout_.locations().size()));
+  status.address_claim(dds::to_idl(claimer_.state()));
+  status.source_address(config_.isobus.address);
+  status.name(isobus::to_value(config_.isobus.name));
+  status.address_holder(claimer_.holder() ? isobus::to_value(*claimer_.holder()) : 0);
+  status.address_violations(claimer_.counters().address_violations);
+  status.claims_in_valve_range(claimer_.counters().claims_in_valve_range);
+  std::vector<BusNeighbour> neighbours;
+  for (const auto& found : claimer_.neighbours()) {
+    BusNeighbour neighbour;
+    neighbour.address(found.address);
+    neighbour.name(isobus::to_value(found.name));
+    neighbour.last_seen_ns(unix_nanoseconds(found.last_seen));
+    neighbours.push_back(neighbour);
+  }
+  status.neighbours(std::move(neighbours));
   status.stamp_ns(unix_nanoseconds(clock_->wall()));
   sink_.gateway_status(status);
 }
@@ -738,7 +814,7 @@ void Bridge::publish_gateway_status() {
 
 bool Bridge::stop_valve(std::uint32_t serial, const std::string& reason) {
   const auto record = directory_.find(serial);
-  if (!record || !record->online || !send(record->address, codec::Stop{})) return false;
+  if (!record || !record->online || !send(record->address, codec::Stop{}, true)) return false;
   Outcome outcome;
   tracker_->stopped(serial, reason, outcome);
   settle(outcome);
@@ -772,6 +848,57 @@ std::size_t Bridge::stop_commanded_by(const std::string& commander) {
     if (stop_valve(serial, "fail-safe: the commanding writer was lost")) ++stopped;
   }
   return stopped;
+}
+
+// ---- Address claiming ---------------------------------------------------------------------
+
+void Bridge::apply(const isobus::ClaimReaction& reaction) {
+  for (const auto& frame : reaction.send) {
+    if (const auto sent = bus_.send(frame); !sent) {
+      spdlog::warn(
+          "{}: address claiming frame 0x{:08X} not sent ({}); claimed again when the "
+          "bus is back",
+          config_.can_interface, frame.id, sent.error().reason);
+    }
+  }
+  for (const auto& notice : reaction.notices) {
+    if (notice.warning) {
+      spdlog::warn("{}: {}", config_.can_interface, notice.text);
+    } else {
+      spdlog::info("{}: {}", config_.can_interface, notice.text);
+    }
+  }
+  next_deadline_.reset();
+  if (!reaction.became_claimed) return;
+  const auto withheld = std::exchange(polls_withheld_, {});
+  for (const std::uint32_t serial : withheld) {
+    if (const auto valve = directory_.find(serial); valve && valve->online) arm_polling(*valve);
+  }
+  for (const auto& deferred : std::exchange(deferred_, {})) {
+    take_command(deferred.command, deferred.commander);
+  }
+}
+
+void Bridge::reclaim_after_recovery(SteadyTime now) {
+  const auto bus = bus_.statistics();
+  const bool recovered =
+      (cut_off(bus_state_seen_) && !cut_off(bus.state)) || bus.reopens != reopens_seen_;
+  bus_state_seen_ = bus.state;
+  reopens_seen_ = bus.reopens;
+  if (!recovered || !config_.isobus.claim) return;
+  spdlog::info("{}: the bus is back ({}): claiming the address again", config_.can_interface,
+               can::to_string(bus.state));
+  apply(claimer_.claim(now));
+}
+
+isobus::ClaimState Bridge::claim_state() const {
+  std::lock_guard lock(mutex_);
+  return claimer_.state();
+}
+
+std::vector<isobus::Neighbour> Bridge::neighbours() const {
+  std::lock_guard lock(mutex_);
+  return claimer_.neighbours();
 }
 
 bool Bridge::owns(std::uint32_t serial) const {

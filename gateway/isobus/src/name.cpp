@@ -148,6 +148,18 @@ codec::CanFrame request_for_address_claimed(std::uint8_t destination, std::uint8
   return frame;
 }
 
+std::array<IdFilter, 4> claiming_filters(std::uint8_t address) {
+  // The PGN's data page and PDU format (bits 16-25); for PDU1 the destination (bits 8-15).
+  constexpr std::uint32_t kPgnMask = 0x03FF0000;
+  constexpr std::uint32_t kDestinationMask = 0x0000FF00;
+  return {{
+      {kAddressClaimedPgn << 8, kPgnMask},
+      {kRequestPgn << 8 | std::uint32_t{kGlobalAddress} << 8, kPgnMask | kDestinationMask},
+      {kRequestPgn << 8 | std::uint32_t{address} << 8, kPgnMask | kDestinationMask},
+      {address, 0xFF},
+  }};
+}
+
 NetworkFrame classify(const codec::CanFrame& frame) {
   if (!frame.extended) return OtherFrame{};
   const auto source = static_cast<std::uint8_t>(frame.id);

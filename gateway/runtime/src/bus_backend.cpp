@@ -8,6 +8,7 @@
 #include "teejet/can/open_bus.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/can_id.hpp"
+#include "teejet/isobus/name.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -32,6 +33,16 @@ Result<std::vector<sim::ValveConfig>> simulated_valves(const GatewayConfig& conf
   return valves;
 }
 
+// The valves' frames to the controller, and what address claiming needs to hear: the kernel
+// keeps every other ECU's traffic on a shared bus out of the process.
+std::vector<can::Filter> gateway_filters(const GatewayConfig& config) {
+  auto filters = can::controller_side_filters();
+  for (const auto& claiming : isobus::claiming_filters(config.bridge.isobus.address)) {
+    filters.push_back({claiming.id, claiming.mask});
+  }
+  return filters;
+}
+
 }  // namespace
 
 Result<std::optional<int>> simulated_valve_count(const std::string& can) {
@@ -53,9 +64,9 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
   if (!simulated) return simulated.error();
   if (!*simulated) {
     // A gateway started before its CAN interface exists waits for it (docs/faults.md).
-    return BusBackend{can::make_bus(config.can, {.filters = can::controller_side_filters(),
-                                                 .wait_for_interface = true}),
-                      {}};
+    return BusBackend{
+        can::make_bus(config.can, {.filters = gateway_filters(config), .wait_for_interface = true}),
+        {}};
   }
   // Unique per gateway, so that two embedded simulations in one process never share a bus.
   static std::atomic<int> instances{0};
@@ -72,7 +83,7 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
                             .churn = {.period = config.sim_churn_period,
                                       .off_for = config.sim_churn_off_time(),
                                       .seed = config.sim_churn_seed}});
-  backend.bus = can::make_bus("virtual:" + bus_name, can::controller_side_filters());
+  backend.bus = can::make_bus("virtual:" + bus_name, gateway_filters(config));
   return backend;
 }
 

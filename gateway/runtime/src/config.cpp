@@ -7,6 +7,7 @@
 
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/isobus/name.hpp"
 #include "teejet/layout/layout_file.hpp"
 #include "teejet/yaml/reader.hpp"
 
@@ -163,6 +164,29 @@ void read_commands(const Reader& reader, const YAML::Node& c, GatewayConfig& con
   }
 }
 
+// The NAME's fields each by its ISO 11783-5 name, from the one table of them; the address is the
+// sheet's 0xD5, so the NAME is never arbitrary-address capable.
+void read_isobus(const Reader& reader, const YAML::Node& i, GatewayConfig& config) {
+  constexpr std::string_view kFixed = "arbitrary_address_capable";
+  std::vector<std::string_view> keys{"claim"};
+  for (const auto& field : isobus::name_fields()) keys.push_back(field.name);
+  if (i.IsMap() && i[std::string(kFixed)]) {
+    reader.fail(i[std::string(kFixed)], "isobus.arbitrary_address_capable",
+                "the gateway's address is the sheet's 0xD5, never another: its NAME is not "
+                "arbitrary-address capable");
+  }
+  reader.expect_keys(i, "isobus", keys);
+  auto& claim = config.bridge.isobus;
+  if (i["claim"]) claim.claim = reader.flag(i["claim"], "isobus.claim");
+  for (const auto& field : isobus::name_fields()) {
+    const auto node = i[std::string(field.name)];
+    if (!node || field.name == kFixed) continue;
+    const std::string key = "isobus." + std::string(field.name);
+    isobus::set_field(claim.name, field,
+                      static_cast<std::uint32_t>(reader.integer(node, key, 0, field.max())));
+  }
+}
+
 // A relative layout_file is beside the configuration that names it.
 std::string beside(const std::string& source, const std::string& path) {
   const std::filesystem::path file(path);
@@ -249,8 +273,9 @@ Result<GatewayConfig> parse_config(const std::string& text, const std::string& s
                       "the mechanics of each valve are part of layout: now (docs/layout.md): "
                       "valves.default is layout.default, and a valve's go with its location");
         }
-        reader.expect_keys(root, "the file",
-                           {"gateway", "commands", "poll", "layout", "layout_file", "simulator"});
+        reader.expect_keys(
+            root, "the file",
+            {"gateway", "commands", "poll", "layout", "layout_file", "simulator", "isobus"});
         if (const auto g = root["gateway"]) read_gateway(reader, g, base);
         if (const auto c = root["commands"]) read_commands(reader, c, base);
         if (const auto p = root["poll"]) base.bridge.poll = read_poll(reader, p);
@@ -266,6 +291,7 @@ Result<GatewayConfig> parse_config(const std::string& text, const std::string& s
           base.layout_file = beside(source, reader.scalar(f, "layout_file"));
         }
         if (const auto s = root["simulator"]) read_simulator(reader, s, base);
+        if (const auto i = root["isobus"]) read_isobus(reader, i, base);
         return base;
       });
 }

@@ -414,4 +414,32 @@ std::optional<Direction> direction_of(std::string_view word) {
   return std::nullopt;
 }
 
+AddressClaimState to_idl(isobus::ClaimState state) {
+  switch (state) {
+    case isobus::ClaimState::kOff:
+      return CLAIM_OFF;
+    case isobus::ClaimState::kClaiming:
+      return CLAIM_CLAIMING;
+    case isobus::ClaimState::kClaimed:
+      return CLAIM_CLAIMED;
+    case isobus::ClaimState::kYielded:
+      return CLAIM_YIELDED;
+  }
+  return CLAIM_OFF;
+}
+
+isobus::ClaimState from_idl(AddressClaimState state) {
+  switch (state) {
+    case CLAIM_OFF:
+      return isobus::ClaimState::kOff;
+    case CLAIM_CLAIMING:
+      return isobus::ClaimState::kClaiming;
+    case CLAIM_CLAIMED:
+      return isobus::ClaimState::kClaimed;
+    case CLAIM_YIELDED:
+      return isobus::ClaimState::kYielded;
+  }
+  return isobus::ClaimState::kOff;
+}
+
 }  // namespace teejet::dds

@@ -76,6 +76,8 @@ std::string_view to_string(BusState state) {
   return "unknown";
 }
 
+std::string_view to_string(AddressClaimState state) { return isobus::to_string(from_idl(state)); }
+
 std::string_view to_string(LocationRole role) {
   switch (role) {
     case ROLE_SECTION:

@@ -20,6 +20,7 @@
 #include "teejet/core/time.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/directory/valve_directory.hpp"
+#include "teejet/isobus/address_claimer.hpp"
 #include "teejet/layout/layout.hpp"
 
 namespace teejet::bridge {
@@ -55,6 +56,10 @@ struct BridgeConfig {
   // valve whose mechanics are unknown gets its targets as sent, and relative moves wrap. The
   // layout at start: LayoutChanges change the bridge's copy.
   layout::Layout layout;
+  // ISO 11783-5 address claiming of 0xD5 on a bus shared with other ECUs (docs/isobus.md): the
+  // bridge claims when it is made and after the bus recovers, and sends nothing else until it
+  // may. Commands meanwhile wait (the wait is 250 ms), at most kMaxDeferredCommands of them.
+  isobus::ClaimConfig isobus;
 };
 
 // Where the bridge publishes. The DDS adapter implements it; tests record.
@@ -87,6 +92,7 @@ struct BridgeCounters {
   std::uint64_t commands_ignored = 0;       // for serials this gateway has never seen
   std::uint64_t commands_rate_limited = 0;  // of commands_rejected: over the per-valve limit
   std::uint64_t address_conflicts = 0;      // two valves found announcing at one address
+  std::uint64_t neighbour_frames = 0;       // valve frames from an address an ECU claimed: ignored
   std::string last_decode_error;
 };
 
@@ -145,11 +151,19 @@ class Bridge {
   std::size_t stop_commanded_by(const std::string& commander);
 
   bool owns(std::uint32_t serial) const;
+  isobus::ClaimState claim_state() const;
+  std::vector<isobus::Neighbour> neighbours() const;
   BridgeCounters counters() const;
   std::vector<directory::ValveRecord> valves() const;
 
  private:
   void handle_frame(const can::TimedFrame& frame);  // mutex_ held
+  // Sends what address claiming asks, logs its notices, and once the address is held sends
+  // what waited for it. mutex_ held.
+  void apply(const isobus::ClaimReaction& reaction);
+  // Claims again when the bus came back (link up, bus-off restart, interface re-created).
+  void reclaim_after_recovery(SteadyTime now);                                   // mutex_ held
+  void take_command(const ValveCommand& command, const std::string& commander);  // mutex_ held
   void handle_i_am_here(std::uint8_t address, const codec::IAmHere& message, Timestamp received,
                         SteadyTime now);
   void handle_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
@@ -183,6 +197,7 @@ class Bridge {
   // nothing; translate() and encode_frame() also keep what they made for the checks after them.
   struct CommandUnderCheck;
   std::optional<std::string> refuse_unknown_serial(CommandUnderCheck& check);
+  std::optional<std::string> refuse_without_address(CommandUnderCheck& check);
   std::optional<std::string> refuse_offline(CommandUnderCheck& check);
   std::optional<std::string> refuse_contested(CommandUnderCheck& check);
   std::optional<std::string> refuse_online_elsewhere(CommandUnderCheck& check);
@@ -199,7 +214,10 @@ class Bridge {
   void settle(const Outcome& outcome);
   // Sends Stop to an online valve and ends its running command; false if not sent.
   bool stop_valve(std::uint32_t serial, const std::string& reason);
-  Status send(std::uint8_t address, const codec::ToValveMessage& message);
+  // Refused while the address is not held; a Stop goes out during the wait after a claim too
+  // (`even_while_claiming`), never once the address was given up.
+  Status send(std::uint8_t address, const codec::ToValveMessage& message,
+              bool even_while_claiming = false);
   void publish_gateway_status();
   SteadyTime earliest_deadline() const;          // mutex_ held; walks every valve
   SteadyTime earliest_command_deadline() const;  // mutex_ held: commands and the status
@@ -254,6 +272,16 @@ class Bridge {
   // deadline; telemetry only ends them and an I'm Here moves one later or adds one no sooner
   // than offline_after from now. nullopt: walk again.
   mutable std::optional<SteadyTime> next_deadline_;
+
+  isobus::AddressClaimer claimer_;
+  std::set<std::uint32_t> polls_withheld_;  // valves that appeared before the address was held
+  struct DeferredCommand {
+    ValveCommand command;
+    std::string commander;
+  };
+  std::vector<DeferredCommand> deferred_;  // taken during the wait after a claim
+  can::BusState bus_state_seen_ = can::BusState::kErrorActive;
+  std::uint64_t reopens_seen_ = 0;
 };
 
 }  // namespace teejet::bridge

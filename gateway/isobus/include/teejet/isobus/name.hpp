@@ -73,6 +73,15 @@ codec::CanFrame cannot_claim_address(const Name& name);
 // 0x18EA<destination><source>, data 00 EE 00.
 codec::CanFrame request_for_address_claimed(std::uint8_t destination, std::uint8_t source);
 
+// The frames a controller at `address` must hear for address claiming, as extended-id filters
+// (accepted when (id & mask) == (filter id & mask)): claims from anyone to anyone, requests to
+// everyone and to it, and any frame from its own address (a second ECU there).
+struct IdFilter {
+  std::uint32_t id;
+  std::uint32_t mask;
+};
+std::array<IdFilter, 4> claiming_filters(std::uint8_t address);
+
 // What a frame of another ECU means to address claiming.
 struct AddressClaim {
   std::uint8_t source;  // kNullAddress: Cannot Claim Address

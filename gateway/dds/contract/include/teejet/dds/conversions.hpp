@@ -19,6 +19,7 @@
 #include "teejet/codec/codec.hpp"
 #include "teejet/core/result.hpp"
 #include "teejet/core/time.hpp"
+#include "teejet/isobus/address_claimer.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::dds {
@@ -71,5 +72,9 @@ std::optional<ErrorKind> error_kind_of(const codec::FromValveMessage& message);
 // value the IDL does not define. The IDL's values are the wire's (Close 0, Open 1, shortest 2).
 std::string_view direction_word(Direction direction);
 std::optional<Direction> direction_of(std::string_view word);
+
+// The address claim's state on the wire and back.
+AddressClaimState to_idl(isobus::ClaimState state);
+isobus::ClaimState from_idl(AddressClaimState state);
 
 }  // namespace teejet::dds

@@ -15,7 +15,8 @@ std::string_view to_string(CommandState state);   // "accepted", ..., "supersede
 std::string_view to_string(Direction direction);  // "close", "open", "shortest"
 std::string_view to_string(ErrorKind kind);       // "high_voltage", ..., "min_degrees_per_second"
 std::string_view to_string(Telemetry telemetry);  // "version", "position", ..., "cycle_counts"
-std::string_view to_string(BusState state);       // "error_active", ..., "bus_off", "down"
+std::string_view to_string(AddressClaimState state);  // "off", "claiming", "claimed", "yielded"
+std::string_view to_string(BusState state);           // "error_active", ..., "bus_off", "down"
 // The layout's words (teejet/layout/layout.hpp, held equal by bridge_tests).
 std::string_view to_string(LocationRole role);        // "section", "master", "rate", "other"
 std::string_view to_string(LocationState state);      // "ok", "missing", "empty"
