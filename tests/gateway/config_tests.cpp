@@ -51,6 +51,36 @@ TEST(GatewayConfig, TheShippedExampleParsesAndMatchesTheDefaults) {
   ASSERT_TRUE(layout.find("left-master"));
   EXPECT_TRUE(layout.mechanics_of_serial(3)->full_turn());
   EXPECT_EQ(config.layout_file, "");
+  EXPECT_EQ(config.bridge.isobus.claim, defaults.bridge.isobus.claim);
+  EXPECT_EQ(config.bridge.isobus.name, defaults.bridge.isobus.name);
+}
+
+TEST(GatewayConfig, TheIsobusNameIsGivenFieldByFieldWithinEachFieldsRange) {
+  EXPECT_TRUE(parse("").bridge.isobus.claim) << "claiming is on unless turned off";
+  EXPECT_EQ(isobus::to_value(parse("").bridge.isobus.name), 0x2008800000000000ULL);
+  const auto config = parse(R"(
+isobus:
+  claim: false
+  identity_number: 2097151
+  manufacturer_code: 2047
+  ecu_instance: 7
+  function_instance: 31
+  function: 129
+  device_class: 127
+  device_class_instance: 15
+  industry_group: 7
+)");
+  EXPECT_FALSE(config.bridge.isobus.claim);
+  EXPECT_EQ(isobus::to_value(config.bridge.isobus.name), 0x7FFE81FFFFFFFFFFULL);
+  EXPECT_EQ(error_of("isobus:\n  identity_number: 2097152\n"),
+            "test.yaml:2: isobus.identity_number: 2097152 is not a whole number from 0 to 2097151");
+  EXPECT_EQ(error_of("isobus:\n  industry_group: -1\n"),
+            "test.yaml:2: isobus.industry_group: -1 is not a whole number from 0 to 7");
+  EXPECT_EQ(error_of("isobus:\n  arbitrary_address_capable: 1\n"),
+            "test.yaml:2: isobus.arbitrary_address_capable: the gateway's address is the sheet's "
+            "0xD5, never another: its NAME is not arbitrary-address capable");
+  EXPECT_EQ(error_of("isobus:\n  claim: maybe\n"),
+            "test.yaml:2: isobus.claim: 'maybe' is neither true nor false");
 }
 
 TEST(GatewayConfig, ALayoutFileIsReadFromBesideTheConfigurationThatNamesIt) {
@@ -145,7 +175,7 @@ TEST(GatewayConfig, MistakesAreNamedWithTheirLineAndKey) {
       "receive_coalesce_us, receive_coalesce_above_fps, reject_unknown_serials, record_frames)");
   EXPECT_EQ(error_of("polling: {}\n"),
             "test.yaml:1: the file: unknown key 'polling' (gateway, commands, poll, layout, "
-            "layout_file, simulator)");
+            "layout_file, simulator, isobus)");
   EXPECT_EQ(error_of("poll:\n  position: 300\n"),
             "test.yaml:2: poll.position: 300 is not a whole number from 0 to 255");
   EXPECT_EQ(error_of("gateway: {on_commander_lost: panic}"),

@@ -42,7 +42,8 @@ inline std::unique_ptr<Gateway> make_gateway(const GatewayConfig& config) {
   return std::make_unique<Gateway>(config, backend ? std::move(*backend) : BusBackend{});
 }
 
-// Starts `gateway` and waits until its bridge knows `valves` valves, all online. Call it with
+// Starts `gateway` and waits until its bridge knows `valves` valves, all online, and holds its
+// address. Call it with
 // ASSERT_NO_FATAL_FAILURE.
 inline void start_and_wait_online(Gateway& gateway, std::size_t valves) {
   using namespace std::chrono_literals;
@@ -55,6 +56,10 @@ inline void start_and_wait_online(Gateway& gateway, std::size_t valves) {
       },
       15s))
       << "the gateway never saw its simulated valves";
+  // And holds its address: what waited for the claim (the valves' polls) has gone out.
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] { return gateway.bridge().claim_state() != isobus::ClaimState::kClaiming; }, 15s))
+      << "the gateway never ended its address claim";
 }
 
 // Where a simulated valve really is: what the wire should have made it do.

@@ -402,6 +402,14 @@ struct GatewayValues {
   std::uint32_t gateways_seen;
   std::vector<std::uint32_t> serials_online;
   std::uint32_t locations_known;
+  teejet::AddressClaimState address_claim;
+  std::uint8_t source_address;
+  std::uint64_t name, holder, violations, claims_in_valve_range;
+  struct Neighbour {
+    std::uint8_t address;
+    std::uint64_t name, last_seen;
+  };
+  std::vector<Neighbour> neighbours;
 };
 
 Sample gateway_status(const GatewayValues& v) {
@@ -421,6 +429,24 @@ Sample gateway_status(const GatewayValues& v) {
   s.gateways_seen(v.gateways_seen);
   s.serials_online(v.serials_online);
   s.locations_known(v.locations_known);
+  s.address_claim(v.address_claim);
+  s.source_address(v.source_address);
+  s.name(v.name);
+  s.address_holder(v.holder);
+  s.address_violations(v.violations);
+  s.claims_in_valve_range(v.claims_in_valve_range);
+  std::vector<teejet::BusNeighbour> neighbours;
+  json neighbours_json = json::array();
+  for (const auto& n : v.neighbours) {
+    teejet::BusNeighbour neighbour;
+    neighbour.address(n.address);
+    neighbour.name(n.name);
+    neighbour.last_seen_ns(n.last_seen);
+    neighbours.push_back(neighbour);
+    neighbours_json.push_back(
+        {{"address", n.address}, {"name", u64(n.name)}, {"last_seen_ns", u64(n.last_seen)}});
+  }
+  s.neighbours(neighbours);
   return make(s, {{"gateway", v.gateway},
                   {"can_interface", v.can_interface},
                   {"bus_state", static_cast<std::uint32_t>(v.bus_state)},
@@ -435,7 +461,14 @@ Sample gateway_status(const GatewayValues& v) {
                   {"stamp_ns", u64(v.stamp)},
                   {"gateways_seen", v.gateways_seen},
                   {"serials_online", v.serials_online},
-                  {"locations_known", v.locations_known}});
+                  {"locations_known", v.locations_known},
+                  {"address_claim", static_cast<std::uint32_t>(v.address_claim)},
+                  {"source_address", v.source_address},
+                  {"name", u64(v.name)},
+                  {"address_holder", u64(v.holder)},
+                  {"address_violations", u64(v.violations)},
+                  {"claims_in_valve_range", u64(v.claims_in_valve_range)},
+                  {"neighbours", neighbours_json}});
 }
 
 // A data frame of `data`; a remote frame (remote_dlc) asks for that many bytes and carries none.
@@ -588,7 +621,15 @@ std::vector<ChannelSpec> known_channels() {
                        kBase + 35,
                        8,
                        {100001, 100002, 0xFFFFFFFF},
-                       6}),
+                       6,
+                       CLAIM_YIELDED,
+                       0xD5,
+                       0x2008800000000100ULL,
+                       0x20088000000000FFULL,
+                       3,
+                       1,
+                       {{0x26, 0xA00C81045A20021BULL, kBase + 30},
+                        {0xE0, 0xFFFFFFFFFFFFFFFFULL, kAbove53 + 30}}}),
        gateway_status({k64,
                        "vcan31",
                        BUS_OFF,
@@ -603,7 +644,14 @@ std::vector<ChannelSpec> known_channels() {
                        kAbove53 + 35,
                        0xFFFFFFFF,
                        {},
-                       0xFFFFFFFF})});
+                       0xFFFFFFFF,
+                       CLAIM_OFF,
+                       0,
+                       0,
+                       0,
+                       0xFFFFFFFFFFFFFFFFULL,
+                       0,
+                       {}})});
   // Every data length 0..8, standard and extended identifiers, both directions.
   std::vector<Sample> frames;
   for (std::uint8_t length = 0; length <= 8; ++length) {

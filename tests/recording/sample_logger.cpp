@@ -147,6 +147,15 @@ json fields(const teejet::LayoutChangeStatus& s) {
           {"state", static_cast<int>(s.state())}, {"reason", s.reason().to_string()},
           {"stamp_ns", u64(s.stamp_ns())}};
 }
+json neighbours(const std::vector<teejet::BusNeighbour>& found) {
+  json list = json::array();
+  for (const auto& n : found) {
+    list.push_back({{"address", n.address()},
+                    {"name", u64(n.name())},
+                    {"last_seen_ns", u64(n.last_seen_ns())}});
+  }
+  return list;
+}
 json fields(const teejet::GatewayStatus& s) {
   return {{"gateway", s.gateway().to_string()},
           {"can_interface", s.can_interface().to_string()},
@@ -162,7 +171,14 @@ json fields(const teejet::GatewayStatus& s) {
           {"stamp_ns", u64(s.stamp_ns())},
           {"gateways_seen", s.gateways_seen()},
           {"serials_online", s.serials_online()},
-          {"locations_known", s.locations_known()}};
+          {"locations_known", s.locations_known()},
+          {"address_claim", static_cast<int>(s.address_claim())},
+          {"source_address", s.source_address()},
+          {"name", u64(s.name())},
+          {"address_holder", u64(s.address_holder())},
+          {"address_violations", u64(s.address_violations())},
+          {"claims_in_valve_range", u64(s.claims_in_valve_range())},
+          {"neighbours", neighbours(s.neighbours())}};
 }
 json fields(const teejet::BusFrame& s) {
   return {{"gateway", s.gateway().to_string()},

@@ -21,7 +21,9 @@
 #include "support/subprocess.hpp"
 #include "support/test_domain.hpp"
 #include "support/text.hpp"
+#include "teejet/can/open_bus.hpp"
 #include "teejet/codec/codec.hpp"
+#include "teejet/sim/isobus_neighbour.hpp"
 
 namespace teejet::testing {
 namespace {
@@ -279,6 +281,51 @@ TEST_F(ValvectlEndToEnd, CommandToAnOfflineValveIsRejectedWithTheReason) {
   EXPECT_TRUE(contains(rejected.out, "TJV000999 target_degrees #"));
   EXPECT_TRUE(contains(rejected.out, ": REJECTED: valve TJV000999 is offline"))
       << describe(rejected);
+}
+
+// Another ECU on the gateway's bus: a terminal at 0x26 shows in `valvectl neighbours`; a
+// contender for 0xD5 with a NAME of higher priority makes the gateway give its address up, and
+// valvectl's command is REJECTED naming that NAME, until the contender cannot claim any more.
+TEST_F(ValvectlEndToEnd, NeighboursAreListedAndAContenderFor0xD5StopsCommandsUntilItLeaves) {
+  const std::string bus = "virtual:" + gateway_->simulator().bus_name();
+  isobus::Name terminal_name = isobus::from_value(0xA00C81045A20021BULL);
+  sim::IsobusNeighbour terminal(can::make_bus(bus, std::vector<can::Filter>{}), terminal_name,
+                                0x26);
+  ASSERT_TRUE(terminal.start());
+  ASSERT_TRUE(terminal.claim());
+  Finished listed;
+  ASSERT_TRUE(eventually(
+      [&] {
+        listed = valvectl({"neighbours"});
+        return contains(listed.out, "0x26  0xA00C81045A20021B");
+      },
+      15s))
+      << describe(listed);
+  EXPECT_EQ(listed.exit_code, kExitOk) << describe(listed);
+  EXPECT_TRUE(contains(listed.out, "holds 0xD5 as NAME 0x2008800000000000, 1 neighbour(s)"))
+      << describe(listed);
+
+  const auto winner = isobus::from_value(0x1000000000000001ULL);  // industry group 1: lower
+  sim::IsobusNeighbour contender(can::make_bus(bus, std::vector<can::Filter>{}), winner, 0xD5);
+  ASSERT_TRUE(contender.start());
+  ASSERT_TRUE(contender.claim());
+  ASSERT_TRUE(eventually(
+      [&] { return gateway_->bridge().claim_state() == isobus::ClaimState::kYielded; }, 10s));
+  // Cannot Claim Address, from the null address, with the gateway's NAME.
+  EXPECT_TRUE(contender.wait_for(
+      [](const codec::CanFrame& f) { return f.id == 0x18EEFFFEu && f.data[7] == 0x20; }, 5s));
+  const auto refused = valvectl({"move", "1", "--to", "10"});
+  EXPECT_EQ(refused.exit_code, kExitRejected) << describe(refused);
+  EXPECT_TRUE(contains(refused.out,
+                       ": REJECTED: the gateway gave its address 0xD5 up to an ECU with NAME "
+                       "0x1000000000000001 (higher priority)"))
+      << describe(refused);
+
+  ASSERT_TRUE(contender.give_up());
+  ASSERT_TRUE(eventually(
+      [&] { return gateway_->bridge().claim_state() == isobus::ClaimState::kClaimed; }, 10s));
+  const auto moved = valvectl({"move", "1", "--to", "10", "--wait"});
+  EXPECT_EQ(moved.exit_code, kExitOk) << describe(moved);
 }
 
 TEST_F(ValvectlEndToEnd, SettingTheBaudRateWithoutPermissionIsRejected) {

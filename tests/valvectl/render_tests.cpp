@@ -153,7 +153,46 @@ TEST(ValvectlRender, GatewayLine) {
   gateway.frames_out = 20;
   EXPECT_EQ(render_gateways({gateway}),
             "gateway boom on can0: error_passive, 3/4 valves online, 100 frames in, 20 out, 0 "
-            "decode errors\n");
+            "decode errors; address claiming off\n");
+}
+
+TEST(ValvectlRender, TheGatewayLineSaysWhoHoldsItsAddressAndTheNeighboursAreATable) {
+  GatewaySummary gateway;
+  gateway.name = "boom";
+  gateway.can_interface = "can0";
+  gateway.valves_online = 3;
+  gateway.valves_known = 3;
+  gateway.address_claim = CLAIM_CLAIMED;
+  gateway.source_address = 0xD5;
+  gateway.isobus_name = 0x2008800000000000ULL;
+  BusNeighbour terminal;
+  terminal.address(0x26);
+  terminal.name(0xA00C81045A20021BULL);
+  terminal.last_seen_ns(unix_nanoseconds(Timestamp{std::chrono::seconds(1'700'000'000)}));
+  gateway.neighbours = {terminal};
+  EXPECT_EQ(render_gateways({gateway}),
+            "gateway boom on can0: error_active, 3/3 valves online, 0 frames in, 0 out, 0 decode "
+            "errors; holds 0xD5 as NAME 0x2008800000000000, 1 neighbour(s)\n");
+  EXPECT_EQ(render_neighbours({gateway}, Timestamp{std::chrono::seconds(1'700'000'042)}),
+            "GATEWAY  ADDR  NAME                INDUSTRY  DEVICE_CLASS  FUNCTION  MANUFACTURER  "
+            "IDENTITY  LAST_SEEN\n"
+            "boom     0x26  0xA00C81045A20021B         2             6       129           721  "
+            "     539   42 s ago\n");
+  gateway.address_claim = CLAIM_YIELDED;
+  gateway.address_holder = 0x20087FFFFFFFFFFFULL;
+  gateway.address_violations = 2;
+  gateway.neighbours.clear();
+  EXPECT_EQ(render_gateways({gateway}),
+            "gateway boom on can0: error_active, 3/3 valves online, 0 frames in, 0 out, 0 decode "
+            "errors; GAVE UP 0xD5 to NAME 0x20087FFFFFFFFFFF: sends nothing, refuses commands, 2 "
+            "address violation(s)\n");
+  EXPECT_EQ(render_neighbours({gateway}, Timestamp{}),
+            "no ECU has claimed an address on boom (can0)\n");
+  const auto json = neighbours_json({gateway});
+  EXPECT_EQ(json[0]["address_claim"]["state"], "yielded");
+  EXPECT_EQ(json[0]["address_claim"]["holder"]["name"], "0x20087FFFFFFFFFFF");
+  EXPECT_EQ(json[0]["address_claim"]["name"]["industry_group"], 2);
+  EXPECT_EQ(json[0]["address_claim"]["name"]["device_class"], 4);
 }
 
 TEST(ValvectlRender, LayoutListsThePlacesInMachineOrderAndTheValvesInNone) {

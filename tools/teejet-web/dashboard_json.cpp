@@ -48,6 +48,7 @@ nlohmann::json gateway_json(const client::GatewaySummary& gateway) {
       {"valves_online", gateway.valves_online},
       {"valves_known", gateway.valves_known},
       {"lost", gateway.lost},
+      {"address_claim", client::claim_json(gateway)},
   };
 }
 

@@ -62,6 +62,7 @@ struct Parser {
   CLI::App* list = nullptr;
   CLI::App* watch = nullptr;
   CLI::App* layout = nullptr;
+  CLI::App* neighbours = nullptr;
   CLI::App* assign = nullptr;
   CLI::App* identify = nullptr;
   CLI::App* unassign = nullptr;
@@ -212,6 +213,11 @@ void define(Parser& parser) {
 
   parser.layout = app.add_subcommand(
       "layout", "where each valve sits: every place of the gateways' layouts, in machine order");
+
+  parser.neighbours = app.add_subcommand(
+      "neighbours",
+      "the other ECUs that claimed addresses on each gateway's bus (ISOBUS), and each gateway's "
+      "own claim of 0xD5");
 
   const auto add_location = [&](CLI::App* subcommand) {
     subcommand->add_option("LOCATION", raw.location, "a place of a gateway's layout (section-03)")
@@ -396,6 +402,8 @@ void build_invocation(Parser& parser) {
     invocation.subcommand = Subcommand::kList;
   } else if (used == parser.layout) {
     invocation.subcommand = Subcommand::kLayout;
+  } else if (used == parser.neighbours) {
+    invocation.subcommand = Subcommand::kNeighbours;
   } else if (used == parser.assign || used == parser.unassign) {
     invocation.subcommand = Subcommand::kLayoutChange;
     LayoutChangeRequest& change = invocation.layout_change;

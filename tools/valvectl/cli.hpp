@@ -55,7 +55,7 @@ struct LayoutChangeRequest {
   bool move = false;         // assign: take the valve from the place it sits at now
 };
 
-enum class Subcommand { kList, kWatch, kLayout, kLayoutChange, kIdentify, kCommand };
+enum class Subcommand { kList, kWatch, kLayout, kNeighbours, kLayoutChange, kIdentify, kCommand };
 
 struct Invocation {
   GlobalOptions global;

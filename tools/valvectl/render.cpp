@@ -7,8 +7,10 @@
 #include <set>
 #include <sstream>
 
+#include "teejet/client/json.hpp"
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/names.hpp"
+#include "teejet/isobus/name.hpp"
 
 namespace teejet::valvectl {
 namespace {
@@ -187,6 +189,43 @@ nlohmann::json layout_json(const ValveTable& table) {
   return {{"locations", places}, {"unassigned", serials}};
 }
 
+namespace {
+
+// "; holds 0xD5 as NAME 0x2008800000000000, 2 neighbour(s)" and the like.
+std::string claim_text(const GatewaySummary& gateway) {
+  const std::string address = address_text(gateway.source_address);
+  const std::string name = isobus::to_text(isobus::from_value(gateway.isobus_name));
+  std::string text;
+  switch (gateway.address_claim) {
+    case CLAIM_OFF:
+      text = "; address claiming off";
+      break;
+    case CLAIM_CLAIMING:
+      text = "; claiming " + address + " as NAME " + name;
+      break;
+    case CLAIM_CLAIMED:
+      text = "; holds " + address + " as NAME " + name;
+      break;
+    case CLAIM_YIELDED:
+      text = "; GAVE UP " + address + " to NAME " +
+             isobus::to_text(isobus::from_value(gateway.address_holder)) +
+             ": sends nothing, refuses commands";
+      break;
+  }
+  if (!gateway.neighbours.empty()) {
+    text += ", " + std::to_string(gateway.neighbours.size()) + " neighbour(s)";
+  }
+  if (gateway.address_violations > 0) {
+    text += ", " + std::to_string(gateway.address_violations) + " address violation(s)";
+  }
+  if (gateway.claims_in_valve_range > 0) {
+    text += ", " + std::to_string(gateway.claims_in_valve_range) + " claim(s) where valves live";
+  }
+  return text;
+}
+
+}  // namespace
+
 std::string render_gateways(const std::vector<GatewaySummary>& gateways) {
   std::ostringstream out;
   for (const GatewaySummary& gateway : gateways) {
@@ -195,9 +234,55 @@ std::string render_gateways(const std::vector<GatewaySummary>& gateways) {
     if (gateway.lost) out << ": LOST (no word from it: killed, powered off or cut off); last said";
     out << ": " << dds::to_string(gateway.bus_state) << ", " << gateway.valves_online << '/'
         << gateway.valves_known << " valves online, " << gateway.frames_in << " frames in, "
-        << gateway.frames_out << " out, " << gateway.decode_errors << " decode errors\n";
+        << gateway.frames_out << " out, " << gateway.decode_errors << " decode errors"
+        << claim_text(gateway) << '\n';
   }
   return out.str();
+}
+
+std::string render_neighbours(const std::vector<GatewaySummary>& gateways, Timestamp now) {
+  const std::vector<Column> columns = {
+      {"GATEWAY", kLeft},       {"ADDR", kLeft},          {"NAME", kLeft},
+      {"INDUSTRY", kRight},     {"DEVICE_CLASS", kRight}, {"FUNCTION", kRight},
+      {"MANUFACTURER", kRight}, {"IDENTITY", kRight},     {"LAST_SEEN", kRight},
+  };
+  const auto field = [](const isobus::Name& name, std::string_view key) {
+    for (const auto& f : isobus::name_fields()) {
+      if (f.name == key) return std::to_string(isobus::field_value(name, f));
+    }
+    return std::string("-");
+  };
+  std::vector<std::vector<std::string>> cells;
+  std::ostringstream empty;
+  for (const GatewaySummary& gateway : gateways) {
+    if (gateway.neighbours.empty()) {
+      empty << "no ECU has claimed an address on " << gateway.name
+            << (gateway.can_interface.empty() ? "" : " (" + gateway.can_interface + ")") << '\n';
+    }
+    for (const BusNeighbour& neighbour : gateway.neighbours) {
+      const isobus::Name name = isobus::from_value(neighbour.name());
+      const auto age = now - from_unix_nanoseconds(neighbour.last_seen_ns());
+      cells.push_back({gateway.name, address_text(neighbour.address()), isobus::to_text(name),
+                       field(name, "industry_group"), field(name, "device_class"),
+                       field(name, "function"), field(name, "manufacturer_code"),
+                       field(name, "identity_number"),
+                       std::to_string(std::max<long long>(
+                           std::chrono::duration_cast<std::chrono::seconds>(age).count(), 0)) +
+                           " s ago"});
+    }
+  }
+  std::ostringstream out;
+  if (!cells.empty()) out << aligned(columns, cells);
+  out << empty.str();
+  return out.str();
+}
+
+nlohmann::json neighbours_json(const std::vector<GatewaySummary>& gateways) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const GatewaySummary& gateway : gateways) {
+    list.push_back({{"gateway", gateway.name}, {"address_claim", claim_json(gateway)}});
+  }
+  return list;
 }
 
 std::string status_text(const CommandStatus& status) {

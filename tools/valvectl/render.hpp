@@ -9,6 +9,7 @@
 
 #include "teejet/client/json.hpp"
 #include "teejet/client/valve_table.hpp"
+#include "teejet/core/time.hpp"
 #include "teejet/valve.h"
 
 namespace teejet::valvectl {
@@ -26,8 +27,15 @@ std::string render_layout(const ValveTable& table);
 //   "state":"ok","position":45.0,"address":216,"gateway":"...","closed_deg":0.0,
 //   "opened_deg":360.0},...],"unassigned":["TJV000006"]}; missing values are null.
 nlohmann::json layout_json(const ValveTable& table);
-// One line per gateway: name, interface, bus state, valves online/known, frame counters.
+// One line per gateway: name, interface, bus state, valves online/known, frame counters, and
+// its address claim ("holds 0xD5 as NAME 0x...", "GAVE UP 0xD5 to NAME 0x...: sends nothing").
 std::string render_gateways(const std::vector<GatewaySummary>& gateways);
+// The ECUs that claimed addresses on each gateway's bus: GATEWAY ADDR NAME INDUSTRY_GROUP
+// DEVICE_CLASS FUNCTION MANUFACTURER IDENTITY LAST_SEEN, one row each; a NAME's fields from
+// isobus::name_fields(). "no ECU has claimed an address on ..." for a gateway without any.
+std::string render_neighbours(const std::vector<GatewaySummary>& gateways, Timestamp now);
+// [{"gateway":"...","address_claim":{...client::claim_json...}}, ...]
+nlohmann::json neighbours_json(const std::vector<GatewaySummary>& gateways);
 
 // "TJV000002 target_degrees #17: ACCEPTED", "...: REJECTED: valve TJV000002 is offline".
 std::string status_text(const CommandStatus& status);

@@ -86,6 +86,8 @@ class Session {
         return watch();
       case Subcommand::kLayout:
         return layout();
+      case Subcommand::kNeighbours:
+        return neighbours();
       case Subcommand::kLayoutChange:
         return layout_change();
       case Subcommand::kIdentify:
@@ -168,6 +170,24 @@ class Session {
       terminal_.out << layout_json(table).dump() << '\n';
     } else {
       terminal_.out << render_layout(table);
+    }
+    terminal_.out << std::flush;
+    return kExitOk;
+  }
+
+  int neighbours() {
+    discover_directory(after_timeout());
+    if (terminal_.interrupted) return kExitInterrupted;
+    const ValveTable table = view_.snapshot();
+    if (table.gateways().empty()) {
+      complain("no gateway found on " + domain_text());
+      return kExitNotFound;
+    }
+    if (invocation_.global.json) {
+      terminal_.out << neighbours_json(table.gateways()).dump() << '\n';
+    } else {
+      terminal_.out << render_gateways(table.gateways())
+                    << render_neighbours(table.gateways(), system_clock()->wall());
     }
     terminal_.out << std::flush;
     return kExitOk;

@@ -31,6 +31,14 @@ Status IsobusNeighbour::claim() {
   return bus_->send(isobus::address_claimed(name_, address_));
 }
 
+Status IsobusNeighbour::give_up() {
+  {
+    std::lock_guard lock(mutex_);
+    holds_ = false;
+  }
+  return bus_->send(isobus::cannot_claim_address(name_));
+}
+
 Status IsobusNeighbour::request_claims(std::uint8_t destination) {
   return bus_->send(isobus::request_for_address_claimed(destination, address_));
 }

@@ -1,9 +1,11 @@
 #include "teejet/client/json.hpp"
 
+#include <cstdio>
 #include <string>
 
 #include "teejet/codec/codec.hpp"
 #include "teejet/dds/names.hpp"
+#include "teejet/isobus/name.hpp"
 
 namespace teejet::client {
 
@@ -108,6 +110,42 @@ nlohmann::json status_json(const LayoutChangeStatus& status) {
       {"change_id", status.change_id()},
       {"origin", status.origin().to_string()},
   };
+}
+
+namespace {
+
+std::string hex_address(std::uint8_t address) {
+  char text[8];
+  std::snprintf(text, sizeof text, "0x%02X", address);
+  return text;
+}
+
+}  // namespace
+
+nlohmann::json name_json(std::uint64_t value) {
+  const isobus::Name name = isobus::from_value(value);
+  nlohmann::json json{{"name", isobus::to_text(name)}};
+  for (const auto& field : isobus::name_fields()) {
+    json[std::string(field.name)] = isobus::field_value(name, field);
+  }
+  return json;
+}
+
+nlohmann::json claim_json(const GatewaySummary& gateway) {
+  nlohmann::json neighbours = nlohmann::json::array();
+  for (const BusNeighbour& neighbour : gateway.neighbours) {
+    neighbours.push_back({{"address", hex_address(neighbour.address())},
+                          {"name", name_json(neighbour.name())},
+                          {"last_seen_ns", neighbour.last_seen_ns()}});
+  }
+  return {{"state", std::string(dds::to_string(gateway.address_claim))},
+          {"address", hex_address(gateway.source_address)},
+          {"name", name_json(gateway.isobus_name)},
+          {"holder", gateway.address_claim == CLAIM_YIELDED ? name_json(gateway.address_holder)
+                                                            : nlohmann::json(nullptr)},
+          {"violations", gateway.address_violations},
+          {"claims_in_valve_range", gateway.claims_in_valve_range},
+          {"neighbours", std::move(neighbours)}};
 }
 
 }  // namespace teejet::client

@@ -79,6 +79,13 @@ void ValveTable::on_gateway_status(const GatewayStatus& status, const std::strin
   summary.rx_dropped = status.rx_dropped();
   summary.gateways_seen = status.gateways_seen();
   summary.locations_known = status.locations_known();
+  summary.address_claim = status.address_claim();
+  summary.source_address = status.source_address();
+  summary.isobus_name = status.name();
+  summary.address_holder = status.address_holder();
+  summary.address_violations = status.address_violations();
+  summary.claims_in_valve_range = status.claims_in_valve_range();
+  summary.neighbours = status.neighbours();
   if (!participant.empty()) summary.participants.insert(participant);
 }
 

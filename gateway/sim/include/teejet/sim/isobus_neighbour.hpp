@@ -33,7 +33,8 @@ class IsobusNeighbour {
   Status start();
   void stop();
 
-  Status claim();  // Address Claimed from its address
+  Status claim();    // Address Claimed from its address
+  Status give_up();  // Cannot Claim Address: it leaves its address (and defends it no more)
   Status request_claims(std::uint8_t destination = isobus::kGlobalAddress);  // from its address
   Status send(const codec::CanFrame& frame);
   // Whether it still holds its address (it gives it up to a higher-priority claim).

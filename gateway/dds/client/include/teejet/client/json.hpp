@@ -34,6 +34,14 @@ nlohmann::json status_json(const CommandStatus& status);
 // is where the place stands after the change (null: empty).
 nlohmann::json status_json(const LayoutChangeStatus& status);
 
+// An ISO 11783-5 NAME: {"name":"0x2008800000000000","identity_number":0,...} with every field
+// of isobus::name_fields() by its name.
+nlohmann::json name_json(std::uint64_t name);
+// A gateway's address claim: {"state":"claimed","address":"0xD5","name":{...},"holder":null or
+// {...},"violations":0,"claims_in_valve_range":0,"neighbours":[{"address":"0x26",
+// "name":{...},"last_seen_ns":...}, ...]}.
+nlohmann::json claim_json(const GatewaySummary& gateway);
+
 // A message's fields by the codec's names, {"volts":12.1}; {} for a message without fields.
 nlohmann::json fields_json(const codec::FromValveMessage& message);
 

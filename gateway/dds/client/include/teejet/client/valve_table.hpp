@@ -67,6 +67,16 @@ struct GatewaySummary {
   std::uint64_t rx_dropped = 0;
   std::uint32_t gateways_seen = 0;    // on the domain by its own count, itself included
   std::uint32_t locations_known = 0;  // places in its layout
+  // ISO 11783-5 address claiming on its bus (docs/isobus.md): the state of its claim of
+  // source_address, its NAME (isobus_name), the NAME it yielded the address to (0: none), and the
+  // ECUs that claimed addresses there.
+  AddressClaimState address_claim = CLAIM_OFF;
+  std::uint8_t source_address = 0;
+  std::uint64_t isobus_name = 0;
+  std::uint64_t address_holder = 0;
+  std::uint64_t address_violations = 0;
+  std::uint64_t claims_in_valve_range = 0;
+  std::vector<BusNeighbour> neighbours;
   // The participants publishing status under this name: more than one is two gateways
   // sharing a name.
   std::set<std::string> participants;
