@@ -297,6 +297,12 @@ def read_only_page(driver):
                         ok=lambda seen: len(seen) == 1 and "4/4 online" in seen[0]["line"])
     check(not panels[0]["open"] and "error_active" in panels[0]["line"],
           f"the gateway's line: {panels}")
+    # Folded under it: its claim of 0xD5 on the bus (docs/isobus.md).
+    claim = eventually(lambda: driver.execute_script(
+        "return document.querySelector('#gateway-list details.gateway table').textContent;"), 15,
+                       "the gateway's claim of 0xD5 in its panel",
+                       ok=lambda text: "claimed as NAME 0x2008800000000000" in text)
+    check("address 0xD5" in claim, f"the gateway's panel: {claim!r}")
     controls = driver.execute_script("""
       return [...document.querySelectorAll(
           '.cmd, button, form, #stop-all, #token, input:not(.plot-pick), ' +

@@ -89,10 +89,40 @@ TEST(WebGateways, HealthHasBusStateErrorCountersFramesAndDrops) {
   client::ValveTable table;
   table.on_gateway_status(bench_status());
   ASSERT_EQ(table.gateways().size(), 1u);
-  EXPECT_EQ(gateway_json(table.gateways().at(0)).dump(),
+  auto health = gateway_json(table.gateways().at(0));
+  const auto claim = health["address_claim"];
+  health.erase("address_claim");
+  EXPECT_EQ(health.dump(),
             R"({"bus_state":"error_warning","can_interface":"can0","decode_errors":2,)"
             R"("frames_in":1200,"frames_out":340,"gateway":"bench","lost":false,"rx_dropped":5,)"
             R"("rx_errors":3,"tx_errors":97,"valves_known":3,"valves_online":2})");
+  EXPECT_EQ(claim["state"], "off");
+}
+
+TEST(WebGateways, TheAddressClaimNamesTheHolderAndEveryNeighbourFieldByField) {
+  auto status = bench_status();
+  status.address_claim(CLAIM_YIELDED);
+  status.source_address(0xD5);
+  status.name(0x2008800000000000ULL);
+  status.address_holder(0x1000000000000001ULL);
+  BusNeighbour terminal;
+  terminal.address(0x26);
+  terminal.name(0xA00C81045A20021BULL);
+  terminal.last_seen_ns(1'700'000'000'000'000'000ULL);
+  status.neighbours({terminal});
+  client::ValveTable table;
+  table.on_gateway_status(status);
+  const auto claim = gateway_json(table.gateways().at(0))["address_claim"];
+  EXPECT_EQ(claim["state"], "yielded");
+  EXPECT_EQ(claim["address"], "0xD5");
+  EXPECT_EQ(claim["name"]["name"], "0x2008800000000000");
+  EXPECT_EQ(claim["holder"]["name"], "0x1000000000000001");
+  EXPECT_EQ(claim["holder"]["industry_group"], 1);
+  EXPECT_EQ(claim["neighbours"].dump(),
+            R"([{"address":"0x26","last_seen_ns":1700000000000000000,"name":{)"
+            R"("arbitrary_address_capable":1,"device_class":6,"device_class_instance":0,)"
+            R"("ecu_instance":4,"function":129,"function_instance":0,"identity_number":539,)"
+            R"("industry_group":2,"manufacturer_code":721,"name":"0xA00C81045A20021B"}}])");
 }
 
 TEST(WebUpdates, TheSnapshotHoldsEverythingAndAQuietTickSendsNothing) {

@@ -572,7 +572,11 @@
     }
     const row = (label, value, attrs) => el("tr", {}, el("td", {}, label),
                                             el("td", attrs || {}, String(value)));
-    const trouble = g.lost || g.bus_state !== "error_active";
+    // Its address claim on a bus shared with ISOBUS ECUs (docs/isobus.md): given up to another
+    // ECU, it sends nothing and refuses every command.
+    const claim = g.address_claim || { state: "off", neighbours: [] };
+    const yielded = claim.state === "yielded";
+    const trouble = g.lost || g.bus_state !== "error_active" || yielded;
     if (trouble && panel.dataset.trouble !== "true") panel.open = true;
     panel.dataset.trouble = String(trouble);
     panel.dataset.lost = String(g.lost);
@@ -580,7 +584,8 @@
       el("span", { class: "gateway-name" }, g.gateway),
       el("span", { class: "bus-state", "data-state": g.bus_state }, g.bus_state),
       el("span", { class: "gateway-valves" }, `${g.valves_online}/${g.valves_known} online`),
-      g.lost ? el("span", { class: "lost" }, "LOST (no word from it)") : "");
+      g.lost ? el("span", { class: "lost" }, "LOST (no word from it)") : "",
+      yielded ? el("span", { class: "yielded" }, `${claim.address} given up`) : "");
     panel.querySelector("table").replaceChildren(
          row("interface", g.can_interface),
          row("bus state", g.bus_state, { class: "bus-state", "data-state": g.bus_state }),
@@ -588,7 +593,33 @@
          row("frames in / out", `${g.frames_in} / ${g.frames_out}`),
          row("decode errors", g.decode_errors),
          row("dropped", g.rx_dropped),
-         row("valves online / known", `${g.valves_online} / ${g.valves_known}`));
+         row("valves online / known", `${g.valves_online} / ${g.valves_known}`),
+         ...claimRows(claim, row));
+  }
+
+  // The claim of the gateway's address, and each ECU that claimed one on its bus (its NAME's
+  // function, manufacturer and identity as the server decoded them).
+  function claimRows(claim, row) {
+    const rows = [];
+    if (claim.state === "yielded") {
+      rows.push(row(`address ${claim.address}`, `given up to NAME ${claim.holder.name}`,
+                    { class: "yielded" }));
+    } else if (claim.state !== "off") {
+      rows.push(row(`address ${claim.address}`, `${claim.state} as NAME ${claim.name.name}`));
+    } else {
+      rows.push(row("address claiming", "off"));
+    }
+    if (claim.violations > 0) rows.push(row("address violations", claim.violations));
+    if (claim.claims_in_valve_range > 0) {
+      rows.push(row("ECU claims at valve addresses", claim.claims_in_valve_range,
+                    { class: "yielded" }));
+    }
+    for (const n of claim.neighbours) {
+      const what = `NAME ${n.name.name} (function ${n.name.function}, ` +
+                   `manufacturer ${n.name.manufacturer_code}, identity ${n.name.identity_number})`;
+      rows.push(row(`neighbour ${n.address}`, what, { class: "neighbour" }));
+    }
+    return rows;
   }
 
   // ---- plot ----------------------------------------------------------------------------------
