@@ -233,6 +233,25 @@ TEST_F(AddressClaimTest, ClaimsAgainWhenTheBusComesBack) {
   EXPECT_EQ(bridge.claim_state(), isobus::ClaimState::kClaiming);
 }
 
+TEST_F(AddressClaimTest, TheStopOnExitGoesOutWithinThe250msButNeverOnceTheAddressIsGivenUp) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  announce_valve(bridge, kStart + 100ms);
+  (void)heard();
+  at(kStart + 150ms);
+  EXPECT_EQ(bridge.stop_all(), 1u);
+  const auto stopped = heard();
+  ASSERT_EQ(stopped.size(), 1u);
+  EXPECT_EQ(stopped[0].id, 0x18EFD8D5u);
+  EXPECT_EQ(stopped[0].data[0], 0x00) << "Stop";
+
+  tick_at(bridge, kStart + 300ms);
+  send_at(bridge, kStart + 1s, isobus::address_claimed(winner(), 0xD5));
+  (void)heard();
+  at(kStart + 1100ms);
+  EXPECT_EQ(bridge.stop_all(), 0u);
+  EXPECT_TRUE(heard().empty()) << "0xD5 is another ECU's now";
+}
+
 TEST_F(AddressClaimTest, WithClaimingOffNothingIsClaimedAndCommandsGoOutAtOnce) {
   auto c = config();
   c.isobus.claim = false;
