@@ -15,11 +15,7 @@
 namespace teejet::valvectl {
 namespace {
 
-std::string address_text(std::uint8_t address) {
-  char text[8];
-  std::snprintf(text, sizeof text, "0x%02X", address);
-  return text;
-}
+std::string address_text(std::uint8_t address) { return codec::format_address(address); }
 
 std::string errors_text(const std::set<ErrorKind>& errors) {
   if (errors.empty()) return "-";

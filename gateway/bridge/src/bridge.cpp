@@ -46,11 +46,7 @@ teejet::BusState to_idl(can::BusState state) {
   return BUS_DOWN;
 }
 
-std::string hex_address(std::uint8_t address) {
-  char text[8];
-  std::snprintf(text, sizeof text, "0x%02X", address);
-  return text;
-}
+std::string hex_address(std::uint8_t address) { return codec::format_address(address); }
 
 std::string contest_reason(const directory::Contest& contest) {
   const auto [low, high] = std::minmax(contest.holder, contest.claimant);

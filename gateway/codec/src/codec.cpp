@@ -360,6 +360,12 @@ std::string format_serial(std::uint32_t serial) {
   return text.data();
 }
 
+std::string format_address(std::uint8_t address) {
+  std::array<char, 8> text{};
+  std::snprintf(text.data(), text.size(), "0x%02X", address);
+  return text.data();
+}
+
 Result<std::uint32_t> parse_serial(std::string_view text) {
   const std::string original(text);
   if (text.size() >= 3 && (text[0] == 'T' || text[0] == 't') &&

@@ -3,15 +3,12 @@
 #include <cstdio>
 
 #include "teejet/codec/can_id.hpp"
+#include "teejet/codec/codec.hpp"
 
 namespace teejet::isobus {
 namespace {
 
-std::string hex_address(std::uint8_t address) {
-  char text[8];
-  std::snprintf(text, sizeof text, "0x%02X", address);
-  return text;
-}
+std::string hex_address(std::uint8_t address) { return codec::format_address(address); }
 
 }  // namespace
 

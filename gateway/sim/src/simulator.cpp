@@ -47,11 +47,7 @@ std::string message_text(const Message& message) {
   return text;
 }
 
-std::string address_text(std::uint8_t address) {
-  std::array<char, 8> text{};
-  std::snprintf(text.data(), text.size(), "0x%02X", address);
-  return text.data();
-}
+std::string address_text(std::uint8_t address) { return codec::format_address(address); }
 
 }  // namespace
 

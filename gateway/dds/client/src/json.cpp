@@ -1,6 +1,5 @@
 #include "teejet/client/json.hpp"
 
-#include <cstdio>
 #include <string>
 
 #include "teejet/codec/codec.hpp"
@@ -112,16 +111,6 @@ nlohmann::json status_json(const LayoutChangeStatus& status) {
   };
 }
 
-namespace {
-
-std::string hex_address(std::uint8_t address) {
-  char text[8];
-  std::snprintf(text, sizeof text, "0x%02X", address);
-  return text;
-}
-
-}  // namespace
-
 nlohmann::json name_json(std::uint64_t value) {
   const isobus::Name name = isobus::from_value(value);
   nlohmann::json json{{"name", isobus::to_text(name)}};
@@ -134,12 +123,12 @@ nlohmann::json name_json(std::uint64_t value) {
 nlohmann::json claim_json(const GatewaySummary& gateway) {
   nlohmann::json neighbours = nlohmann::json::array();
   for (const BusNeighbour& neighbour : gateway.neighbours) {
-    neighbours.push_back({{"address", hex_address(neighbour.address())},
+    neighbours.push_back({{"address", codec::format_address(neighbour.address())},
                           {"name", name_json(neighbour.name())},
                           {"last_seen_ns", neighbour.last_seen_ns()}});
   }
   return {{"state", std::string(dds::to_string(gateway.address_claim))},
-          {"address", hex_address(gateway.source_address)},
+          {"address", codec::format_address(gateway.source_address)},
           {"name", name_json(gateway.isobus_name)},
           {"holder", gateway.address_claim == CLAIM_YIELDED ? name_json(gateway.address_holder)
                                                             : nlohmann::json(nullptr)},

@@ -81,6 +81,8 @@ void for_each_field(const FromValveMessage& message, const FieldVisitor& visit);
 
 // "TJV" followed by the serial, zero-padded to six digits: 123 -> "TJV000123".
 std::string format_serial(std::uint32_t serial);
+// A CAN source address as people read it: 0xD5 -> "0xD5".
+std::string format_address(std::uint8_t address);
 
 // Accepts "TJV123456", "tjv123456" or "123456"; the number must fit 24 bits.
 Result<std::uint32_t> parse_serial(std::string_view text);
