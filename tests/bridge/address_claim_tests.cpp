@@ -227,10 +227,31 @@ TEST_F(AddressClaimTest, ClaimsAgainWhenTheBusComesBack) {
   (void)heard();
   can::VirtualBus::set_link_up(bus_name, false);
   tick_at(bridge, kStart + 1s);
+  EXPECT_TRUE(heard().empty()) << "nothing while the link is down";
   can::VirtualBus::set_link_up(bus_name, true);
   tick_at(bridge, kStart + 2s);
   EXPECT_EQ(ids(heard()), (std::vector<std::uint32_t>{0x18EAFFFE, 0x18EEFFD5}));
   EXPECT_EQ(bridge.claim_state(), isobus::ClaimState::kClaiming);
+}
+
+// An outage between two looks, and the look taken by the thread that keeps the commands'
+// deadlines (the bus reader may not look for a long time while the address is held).
+TEST_F(AddressClaimTest, ClaimsAgainAfterAnOutageNoLookSawAndBusOffToo) {
+  Bridge bridge(config(), gateway_bus, sink, clock);
+  tick_at(bridge, kStart + 300ms);
+  (void)heard();
+  can::VirtualBus::set_link_up(bus_name, false);
+  can::VirtualBus::set_link_up(bus_name, true);
+  at(kStart + 2s);
+  bridge.tick_commands();
+  EXPECT_EQ(ids(heard()), (std::vector<std::uint32_t>{0x18EAFFFE, 0x18EEFFD5}));
+  tick_at(bridge, kStart + 3s);
+  EXPECT_EQ(bridge.claim_state(), isobus::ClaimState::kClaimed);
+  can::VirtualBus::set_controller_state(bus_name, can::BusState::kBusOff, 256, 0);
+  can::VirtualBus::set_controller_state(bus_name, can::BusState::kErrorActive, 0, 0);
+  at(kStart + 4s);
+  bridge.tick_commands();
+  EXPECT_EQ(ids(heard()), (std::vector<std::uint32_t>{0x18EAFFFE, 0x18EEFFD5}));
 }
 
 TEST_F(AddressClaimTest, TheStopOnExitGoesOutWithinThe250msButNeverOnceTheAddressIsGivenUp) {

@@ -171,6 +171,26 @@ TEST_F(AddressClaimerTest, TakesTheAddressBackWhenTheHolderStopsAnswering) {
   EXPECT_TRUE(claimer.tick(lost + 11500ms).became_claimed);
 }
 
+TEST_F(AddressClaimerTest, TheWaitRunsFromWhenTheClaimWentOut) {
+  const auto reaction = claimer.claim(kStart);
+  EXPECT_TRUE(reaction.claim_sent);
+  claimer.wait_from(kStart + 8ms);  // the request before it took 8 ms
+  EXPECT_FALSE(claimer.tick(kStart + 250ms).became_claimed);
+  EXPECT_TRUE(claimer.tick(kStart + 258ms).became_claimed);
+}
+
+TEST_F(AddressClaimerTest, OnlyTheHolderOfOurAddressIsANeighbourThere) {
+  hold();
+  (void)hear(address_claimed(lower_priority(), 0xD5));
+  EXPECT_FALSE(claimer.claimed_by_neighbour(0xD5)) << "the contender lost: not there";
+  (void)hear(address_claimed(higher_priority(), 0xD5), kStart + 2s);
+  EXPECT_TRUE(claimer.claimed_by_neighbour(0xD5)) << "the holder";
+  (void)claimer.tick(kStart + 7s);      // the probe
+  (void)claimer.tick(kStart + 8250ms);  // unanswered: taken back
+  EXPECT_EQ(claimer.state(), ClaimState::kClaiming);
+  EXPECT_FALSE(claimer.claimed_by_neighbour(0xD5)) << "the silent holder is gone";
+}
+
 TEST_F(AddressClaimerTest, TakesTheAddressBackWhenTheHolderCannotClaimOrMoves) {
   hold();
   (void)hear(address_claimed(higher_priority(), 0xD5));

@@ -425,30 +425,30 @@ def frames():
     page = WebSocket()
     page.receive()
 
-    def answers_until_pong(payload):
-        """The answers (sent/refused) that arrive before the pong to a ping sent now: the server
-        reads in order, so they are all it made of what came before the ping."""
-        page.sock.sendall(web_client.WebSocket.frame(payload, opcode=web_client.PING))
+    def answers_until(answer_id):
+        """The answers (sent/refused) up to the one to `answer_id`: a page's messages are handled
+        one after another in the order they came, so they are all it made of what came before."""
         seen = []
-        while True:
-            opcode, data = page.receive_frame()
-            if opcode == web_client.PONG and data == payload:
-                return seen
-            if opcode == web_client.TEXT:
-                message = json.loads(data.decode())
-                if message["type"] in ("sent", "refused"):
-                    seen.append(message)
+        while not seen or seen[-1].get("id") != answer_id:
+            message = page.receive()
+            if message["type"] in ("sent", "refused"):
+                seen.append(message)
+        return seen
 
     thirds = [stop[:15], stop[15:30], stop[30:]]
     page.sock.sendall(web_client.WebSocket.frame(thirds[0], fin=False))
-    early = answers_until_pong(b"after the first fragment")
-    check(early == [], f"a first fragment alone was handled: {early}")
+    # Beast answers a ping between fragments; the message is not complete yet.
+    page.sock.sendall(web_client.WebSocket.frame(b"between", opcode=web_client.PING))
     page.sock.sendall(web_client.WebSocket.frame(thirds[1], opcode=web_client.CONTINUATION,
                                                  fin=False) +
                       web_client.WebSocket.frame(thirds[2], opcode=web_client.CONTINUATION))
-    answers = answers_until_pong(b"after the last fragment")
-    check(len(answers) == 1 and answers[0]["type"] == "sent" and answers[0]["id"] == 5 and
-          len(answers[0]["commands"]) == 1, f"a command in three fragments: {answers}")
+    answers = answers_until(5)
+    check(len(answers) == 1 and answers[0]["type"] == "sent" and
+          len(answers[0]["commands"]) == 1,
+          f"a command in three fragments (a first fragment alone handled?): {answers}")
+    page.send('{"id":6,"command":"stop","serial":"TJV000002"}')
+    later = answers_until(6)
+    check(len(later) == 1, f"the fragmented command was answered more than once: {later}")
     print("a command in three fragments was handled once, as one command")
 
 

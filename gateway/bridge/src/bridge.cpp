@@ -108,6 +108,7 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
   const auto statistics = bus_.statistics();
   bus_state_seen_ = statistics.state;
   reopens_seen_ = statistics.reopens;
+  outages_seen_ = statistics.outages;
   std::lock_guard lock(mutex_);
   apply(claimer_.claim(clock_->steady()));
 }
@@ -706,7 +707,6 @@ void Bridge::settle(const Outcome& outcome) {
 void Bridge::tick() {
   std::lock_guard lock(mutex_);
   const SteadyTime now = clock_->steady();
-  reclaim_after_recovery(now);
   apply(claimer_.tick(now));
   Outcome outcome;
   for (const auto& change : directory_.expire(now)) {
@@ -727,7 +727,9 @@ void Bridge::tick_commands() {
   keep_command_deadlines(clock_->steady(), outcome);
 }
 
+// Both threads come here at least once a second (the status), whichever keeps the deadlines.
 void Bridge::keep_command_deadlines(SteadyTime now, Outcome& outcome) {
+  reclaim_after_recovery(now);
   tracker_->expire(now, outcome);
   settle(outcome);
   if (now >= next_status_) {
@@ -864,6 +866,7 @@ void Bridge::apply(const isobus::ClaimReaction& reaction) {
       spdlog::info("{}: {}", config_.can_interface, notice.text);
     }
   }
+  if (reaction.claim_sent) claimer_.wait_from(clock_->steady());
   next_deadline_.reset();
   if (!reaction.became_claimed) return;
   const auto withheld = std::exchange(polls_withheld_, {});
@@ -878,8 +881,11 @@ void Bridge::apply(const isobus::ClaimReaction& reaction) {
 void Bridge::reclaim_after_recovery(SteadyTime now) {
   const auto bus = bus_.statistics();
   const bool recovered =
-      (cut_off(bus_state_seen_) && !cut_off(bus.state)) || bus.reopens != reopens_seen_;
+      !cut_off(bus.state) &&
+      (cut_off(bus_state_seen_) || bus.outages != outages_seen_ || bus.reopens != reopens_seen_);
   bus_state_seen_ = bus.state;
+  if (cut_off(bus.state)) return;  // claimed once it is back
+  outages_seen_ = bus.outages;
   reopens_seen_ = bus.reopens;
   if (!recovered || !config_.isobus.claim) return;
   spdlog::info("{}: the bus is back ({}): claiming the address again", config_.can_interface,

@@ -94,6 +94,7 @@ struct SocketCanBus::State {
 
   void link_down(int error_number) {
     if (!link.down(steady_now())) return;
+    ++counters.outages;
     const std::size_t dropped = discard_retry();
     spdlog::warn("{}: link down ({}); keeping the socket until it is up again{}", name,
                  error_text(error_number), dropped_note(dropped));
@@ -213,6 +214,7 @@ struct SocketCanBus::State {
     if (batch.drop_counter) drops.note(*batch.drop_counter);
     for (const ErrorFrameReport& report : batch.errors) {
       if (apply(report, controller)) {
+        if (controller.state == BusState::kBusOff) ++counters.outages;
         // Frames held for retry would go out long after their time once the controller is
         // back: a valve must not move to a target its commander has given up on.
         const std::size_t dropped =

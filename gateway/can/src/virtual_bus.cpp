@@ -11,6 +11,7 @@ struct VirtualBus::Medium {
   std::vector<VirtualBus*> endpoints;
   bool link_up = true;
   BusState state = BusState::kErrorActive;
+  std::uint64_t outages = 0;  // link downs and bus-offs
   std::uint16_t tx_errors = 0;
   std::uint16_t rx_errors = 0;
 };
@@ -164,6 +165,7 @@ BusStatistics VirtualBus::statistics() const {
   if (medium) {
     std::lock_guard lock(medium->mutex);
     out.state = medium->link_up ? medium->state : BusState::kDown;
+    out.outages = medium->outages;
     out.tx_errors = medium->tx_errors;
     out.rx_errors = medium->rx_errors;
   }
@@ -173,6 +175,7 @@ BusStatistics VirtualBus::statistics() const {
 void VirtualBus::set_link_up(const std::string& bus_name, bool up) {
   auto medium = medium_named(bus_name);
   std::lock_guard lock(medium->mutex);
+  if (medium->link_up && !up) ++medium->outages;
   medium->link_up = up;
 }
 
@@ -180,6 +183,7 @@ void VirtualBus::set_controller_state(const std::string& bus_name, BusState stat
                                       std::uint16_t tx_errors, std::uint16_t rx_errors) {
   auto medium = medium_named(bus_name);
   std::lock_guard lock(medium->mutex);
+  if (state == BusState::kBusOff && medium->state != BusState::kBusOff) ++medium->outages;
   medium->state = state;
   medium->tx_errors = tx_errors;
   medium->rx_errors = rx_errors;

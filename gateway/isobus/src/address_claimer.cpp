@@ -53,11 +53,17 @@ ClaimReaction AddressClaimer::claim(SteadyTime now) {
 void AddressClaimer::send_claim(SteadyTime now, ClaimReaction& reaction) {
   reaction.send.push_back(address_claimed(config_.name, config_.address));
   ++counters_.claims_sent;
+  reaction.claim_sent = true;
   state_ = ClaimState::kClaiming;
   holder_.reset();
+  neighbours_[config_.address].reset();  // a contender that lost, or a holder gone silent
   next_probe_.reset();
   probe_unanswered_at_.reset();
   wait_ends_ = now + config_.wait_after_claim;
+}
+
+void AddressClaimer::wait_from(SteadyTime sent) {
+  if (state_ == ClaimState::kClaiming) wait_ends_ = sent + config_.wait_after_claim;
 }
 
 ClaimReaction AddressClaimer::on_frame(const codec::CanFrame& frame, Timestamp received,
@@ -144,6 +150,7 @@ void AddressClaimer::on_claim(const AddressClaim& claim, Timestamp received, Ste
   }
   if (wins_over(config_.name, claim.name)) {
     ++counters_.contentions_won;
+    neighbours_[config_.address].reset();  // it must give the address up
     reaction.notices.push_back({true, "NAME " + to_text(claim.name) + " claimed " + address_text() +
                                           "; this gateway's NAME " + to_text(config_.name) +
                                           " has the higher priority and claims it again"});

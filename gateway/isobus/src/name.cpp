@@ -176,7 +176,8 @@ NetworkFrame classify(const codec::CanFrame& frame) {
     return AddressClaim{source, from_value(value)};
   }
   if (pdu_format << 8 == kRequestPgn && frame.dlc == 3) {
-    const std::uint32_t pgn = frame.data[0] | frame.data[1] << 8 | frame.data[2] << 16;
+    const std::uint32_t pgn = std::uint32_t{frame.data[0]} | std::uint32_t{frame.data[1]} << 8 |
+                              std::uint32_t{frame.data[2]} << 16;
     if (pgn == kAddressClaimedPgn) return ClaimRequest{destination, source};
   }
   return OtherFrame{source};

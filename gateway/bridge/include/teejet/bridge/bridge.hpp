@@ -161,8 +161,9 @@ class Bridge {
   // Sends what address claiming asks, logs its notices, and once the address is held sends
   // what waited for it. mutex_ held.
   void apply(const isobus::ClaimReaction& reaction);
-  // Claims again when the bus came back (link up, bus-off restart, interface re-created).
-  void reclaim_after_recovery(SteadyTime now);                                   // mutex_ held
+  // Claims again when the bus came back (link up, bus-off restart, interface re-created),
+  // however short the outage was (BusStatistics::outages). mutex_ held.
+  void reclaim_after_recovery(SteadyTime now);
   void take_command(const ValveCommand& command, const std::string& commander);  // mutex_ held
   void handle_i_am_here(std::uint8_t address, const codec::IAmHere& message, Timestamp received,
                         SteadyTime now);
@@ -282,6 +283,7 @@ class Bridge {
   std::vector<DeferredCommand> deferred_;  // taken during the wait after a claim
   can::BusState bus_state_seen_ = can::BusState::kErrorActive;
   std::uint64_t reopens_seen_ = 0;
+  std::uint64_t outages_seen_ = 0;
 };
 
 }  // namespace teejet::bridge

@@ -56,6 +56,9 @@ struct BusStatistics {
   std::uint64_t tx_retried = 0;    // sends that went out from the retry queue after ENOBUFS
   std::uint64_t error_frames = 0;  // error frames received
   std::uint64_t reopens = 0;       // times the socket was reopened after the interface vanished
+  // Times the bus was cut off: its link went down or its controller went bus-off. A cut-off
+  // shorter than the time between two looks at `state` still counts here.
+  std::uint64_t outages = 0;
   BusState state = BusState::kErrorActive;
   std::uint16_t tx_errors = 0;            // controller transmit error counter
   std::uint16_t rx_errors = 0;            // controller receive error counter

@@ -72,6 +72,8 @@ struct ClaimReaction {
   };
   std::vector<Notice> notices;
   bool became_claimed = false;  // the wait after the claim ended: sending may start
+  // `send` holds our claim: the wait runs from when it went out (AddressClaimer::wait_from).
+  bool claim_sent = false;
 };
 
 class AddressClaimer {
@@ -84,6 +86,9 @@ class AddressClaimer {
   ClaimReaction claim(SteadyTime now);
   // A frame another ECU sent (own frames are never received back).
   ClaimReaction on_frame(const codec::CanFrame& frame, Timestamp received, SteadyTime now);
+  // The claim of the last reaction went out at `sent`: the wait after it runs from there, not
+  // from when it was decided (sending the request before it takes a while on a loaded bus).
+  void wait_from(SteadyTime sent);
   // Whatever is due: the end of the wait after the claim, a probe of the holder.
   ClaimReaction tick(SteadyTime now);
   // When tick() next has something to do; nullopt: nothing.
