@@ -98,6 +98,17 @@ check "a claim of 0xE0, where valves pick addresses, is logged" eventually 5 log
   "vcan0: an ECU \(NAME 0x$valve_range_name\) claimed 0xE0, an address valves pick"
 check "GatewayStatus counts it and lists 0xE0 as a neighbour" eventually 5 status_after "$mark" \
   "valve_range_claims=1 .*neighbours=(.*,)?0xE0:0x$valve_range_name(,| |$)"
+# What a person sees: valvectl neighbours, the gateway's claim and a row per ECU.
+neighbours_listed() {
+  "$valvectl" --domain "$domain" --timeout 10 neighbours >"$work/neighbours.txt" 2>&1 &&
+    grep -Eq "holds 0xD5 as NAME 0x$gw_name, [0-9]+ neighbour\(s\), 1 claim\(s\) where valves live" \
+      "$work/neighbours.txt" &&
+    grep -Eq "^[^ ]+ +0x$acd_address +0x$acd_name +2 +6 +129 +721 +539 " "$work/neighbours.txt" &&
+    grep -Eq "^[^ ]+ +0xE0 +0x$valve_range_name " "$work/neighbours.txt"
+}
+check "valvectl neighbours shows the gateway's claim, j1939acd's NAME field by field and 0xE0" \
+  eventually 10 neighbours_listed
+sed 's/^/excerpt: [valvectl neighbours] /' "$work/neighbours.txt"
 
 # ---- 3. requests for claims ---------------------------------------------------------------------
 section "3. requests for claims"
