@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "teejet/dds/names.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
@@ -27,36 +28,6 @@ using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
-
-const char* claim_text(teejet::AddressClaimState state) {
-  switch (state) {
-    case teejet::CLAIM_OFF:
-      return "off";
-    case teejet::CLAIM_CLAIMING:
-      return "claiming";
-    case teejet::CLAIM_CLAIMED:
-      return "claimed";
-    case teejet::CLAIM_YIELDED:
-      return "yielded";
-  }
-  return "?";
-}
-
-const char* bus_text(teejet::BusState state) {
-  switch (state) {
-    case teejet::BUS_ERROR_ACTIVE:
-      return "error_active";
-    case teejet::BUS_ERROR_WARNING:
-      return "error_warning";
-    case teejet::BUS_ERROR_PASSIVE:
-      return "error_passive";
-    case teejet::BUS_OFF:
-      return "bus_off";
-    case teejet::BUS_DOWN:
-      return "down";
-  }
-  return "?";
-}
 
 std::string hex(unsigned long long value, int digits) {
   char text[24];
@@ -81,9 +52,10 @@ class Printer final : public eprosima::fastdds::dds::DataReaderListener {
           "status gateway=%s bus=%s claim=%s address=%s name=%s holder=%s violations=%llu "
           "valve_range_claims=%llu frames_in=%llu frames_out=%llu decode_errors=%llu "
           "neighbours=%s\n",
-          status.gateway().c_str(), bus_text(status.bus_state()),
-          claim_text(status.address_claim()), hex(status.source_address(), 2).c_str(),
-          hex(status.name(), 16).c_str(), hex(status.address_holder(), 16).c_str(),
+          status.gateway().c_str(), std::string(teejet::dds::to_string(status.bus_state())).c_str(),
+          std::string(teejet::dds::to_string(status.address_claim())).c_str(),
+          hex(status.source_address(), 2).c_str(), hex(status.name(), 16).c_str(),
+          hex(status.address_holder(), 16).c_str(),
           static_cast<unsigned long long>(status.address_violations()),
           static_cast<unsigned long long>(status.claims_in_valve_range()),
           static_cast<unsigned long long>(status.frames_in()),
