@@ -225,7 +225,14 @@ TEST_F(GatewayE2E, RejectionsCarryTheirReasonAndTimeoutsAreReported) {
   Ecu late(test_domain(), "late-ecu");
   auto timed_out = late.follow(late.send(move_to(1, 180.0f)), 20s);
   ASSERT_EQ(Ecu::states(timed_out), (std::vector{COMMAND_ACCEPTED, COMMAND_TIMED_OUT}));
-  EXPECT_EQ(timed_out[1].reason().to_string(), "position 90.0 did not reach 180.0 in time");
+  // Which comes first depends on when the valve's speed report (resent every second) falls:
+  // the deadline, or the judgement that it stopped short and holds there.
+  const std::string reason = timed_out[1].reason().to_string();
+  EXPECT_TRUE(reason == "position 90.0 did not reach 180.0 in time" ||
+              reason ==
+                  "stopped at 90.0, short of the 180.0 asked, and holds there (speed 0): blocked, "
+                  "or its mechanics are not these")
+      << reason;
 }
 
 TEST_F(GatewayE2E, AReaddressedValveKeepsItsInstanceAndItsCommands) {
