@@ -35,14 +35,6 @@ isobus::Name winner() {  // higher priority: a lower value
   return name;
 }
 
-std::vector<can::Filter> gateway_filters() {
-  auto filters = can::controller_side_filters();
-  for (const auto& claiming : isobus::claiming_filters(0xD5)) {
-    filters.push_back({claiming.id, claiming.mask});
-  }
-  return filters;
-}
-
 class AddressClaimTest : public ::testing::Test {
  protected:
   AddressClaimTest() {
@@ -94,7 +86,7 @@ class AddressClaimTest : public ::testing::Test {
   GatewayStatus last_status() const { return sink.gateway_statuses().back(); }
 
   std::string bus_name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  can::VirtualBus gateway_bus{bus_name, {.filters = gateway_filters()}};
+  can::VirtualBus gateway_bus{bus_name, {.filters = frames_to_hear(BridgeConfig{})}};
   can::VirtualBus other_ecu{bus_name, {}};
   RecordingSink sink;
   std::shared_ptr<ManualClock> clock = std::make_shared<ManualClock>(kStart);

@@ -115,6 +115,14 @@ Bridge::Bridge(BridgeConfig config, can::Bus& bus, Sink& sink, std::shared_ptr<c
 
 Bridge::~Bridge() = default;
 
+std::vector<can::Filter> frames_to_hear(const BridgeConfig& config) {
+  auto filters = can::controller_side_filters();
+  for (const auto& claiming : isobus::claiming_filters(config.isobus.address)) {
+    filters.push_back({claiming.id, claiming.mask});
+  }
+  return filters;
+}
+
 // ---- Frames from the bus ------------------------------------------------------------------
 
 // The lock is taken per frame, not per burst: a command arriving meanwhile waits for one frame's

@@ -8,7 +8,6 @@
 #include "teejet/can/open_bus.hpp"
 #include "teejet/can/virtual_bus.hpp"
 #include "teejet/codec/can_id.hpp"
-#include "teejet/isobus/name.hpp"
 
 namespace teejet::gateway {
 namespace {
@@ -33,16 +32,6 @@ Result<std::vector<sim::ValveConfig>> simulated_valves(const GatewayConfig& conf
   return valves;
 }
 
-// The valves' frames to the controller, and what address claiming needs to hear: the kernel
-// keeps every other ECU's traffic on a shared bus out of the process.
-std::vector<can::Filter> gateway_filters(const GatewayConfig& config) {
-  auto filters = can::controller_side_filters();
-  for (const auto& claiming : isobus::claiming_filters(config.bridge.isobus.address)) {
-    filters.push_back({claiming.id, claiming.mask});
-  }
-  return filters;
-}
-
 }  // namespace
 
 Result<std::optional<int>> simulated_valve_count(const std::string& can) {
@@ -64,9 +53,9 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
   if (!simulated) return simulated.error();
   if (!*simulated) {
     // A gateway started before its CAN interface exists waits for it (docs/faults.md).
-    return BusBackend{
-        can::make_bus(config.can, {.filters = gateway_filters(config), .wait_for_interface = true}),
-        {}};
+    return BusBackend{can::make_bus(config.can, {.filters = bridge::frames_to_hear(config.bridge),
+                                                 .wait_for_interface = true}),
+                      {}};
   }
   // Unique per gateway, so that two embedded simulations in one process never share a bus.
   static std::atomic<int> instances{0};
@@ -83,7 +72,7 @@ Result<BusBackend> make_bus_backend(const GatewayConfig& config) {
                             .churn = {.period = config.sim_churn_period,
                                       .off_for = config.sim_churn_off_time(),
                                       .seed = config.sim_churn_seed}});
-  backend.bus = can::make_bus("virtual:" + bus_name, gateway_filters(config));
+  backend.bus = can::make_bus("virtual:" + bus_name, bridge::frames_to_hear(config.bridge));
   return backend;
 }
 

@@ -39,21 +39,7 @@ Status IsobusNeighbour::give_up() {
   return bus_->send(isobus::cannot_claim_address(name_));
 }
 
-Status IsobusNeighbour::request_claims(std::uint8_t destination) {
-  return bus_->send(isobus::request_for_address_claimed(destination, address_));
-}
-
 Status IsobusNeighbour::send(const codec::CanFrame& frame) { return bus_->send(frame); }
-
-bool IsobusNeighbour::holds_address() const {
-  std::lock_guard lock(mutex_);
-  return holds_;
-}
-
-std::vector<can::TimedFrame> IsobusNeighbour::heard() const {
-  std::lock_guard lock(mutex_);
-  return heard_;
-}
 
 bool IsobusNeighbour::wait_for(const std::function<bool(const codec::CanFrame&)>& matches,
                                std::chrono::milliseconds timeout) const {

@@ -62,6 +62,11 @@ struct BridgeConfig {
   isobus::ClaimConfig isobus;
 };
 
+// The frames a bridge of `config` must hear, as kernel filters: its valves' frames to the
+// controller and what address claiming needs (isobus::claiming_filters). Every other ECU's
+// traffic on a shared bus stays in the kernel.
+std::vector<can::Filter> frames_to_hear(const BridgeConfig& config);
+
 // Where the bridge publishes. The DDS adapter implements it; tests record.
 class Sink {
  public:

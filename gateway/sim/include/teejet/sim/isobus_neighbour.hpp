@@ -2,7 +2,7 @@
 
 // Another ECU on a shared ISOBUS, for tests and demos without a kernel: it claims an address
 // with its NAME, answers Requests for Address Claimed (to everyone and to its address), gives
-// its address up to a NAME of higher priority, and can send requests and any frame of its own.
+// its address up to a NAME of higher priority, and can send any frame of its own.
 // A contender for the gateway's 0xD5 is a neighbour at 0xD5. Runs one thread on its own bus
 // endpoint (a VirtualBus of the gateway's medium, or a SocketCAN interface) and records every
 // frame it hears.
@@ -35,13 +35,8 @@ class IsobusNeighbour {
 
   Status claim();    // Address Claimed from its address
   Status give_up();  // Cannot Claim Address: it leaves its address (and defends it no more)
-  Status request_claims(std::uint8_t destination = isobus::kGlobalAddress);  // from its address
   Status send(const codec::CanFrame& frame);
-  // Whether it still holds its address (it gives it up to a higher-priority claim).
-  bool holds_address() const;
-
-  // Every frame heard, in order; and a wait for one that `matches`, up to `timeout`.
-  std::vector<can::TimedFrame> heard() const;
+  // Waits up to `timeout` for a frame it heard (since start) that `matches`.
   bool wait_for(const std::function<bool(const codec::CanFrame&)>& matches,
                 std::chrono::milliseconds timeout) const;
 
