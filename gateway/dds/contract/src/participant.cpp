@@ -183,6 +183,10 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   if (auto loaded = load_profiles_once(options.profile_file); !loaded) return loaded.error();
   DomainParticipantQos qos = factory->get_default_participant_qos();
   qos.name(options.name);
+  auto& lease = qos.wire_protocol().builtin.discovery_config.leaseDuration;
+  if (lease < to_dds_duration(options.minimum_lease)) {
+    lease = to_dds_duration(options.minimum_lease);
+  }
   if (!options.role.empty()) {
     // Propagated: sent in the participant's discovery data, where any participant reads it.
     qos.properties().properties().emplace_back(kRoleProperty, options.role, true);

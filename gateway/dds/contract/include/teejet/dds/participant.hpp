@@ -44,6 +44,12 @@ struct ParticipantOptions {
   // process died or became unreachable. A participant that leaves in order is not reported.
   // Runs on a Fast DDS thread: hand the news to a thread of your own.
   std::function<void(const std::string& guid_prefix)> on_participant_dropped;
+  // The least lease this participant announces (how long the others keep it after it falls
+  // silent), whatever the profile says; zero: the profile's. For a short-lived participant:
+  // Fast DDS 2.9.1 aborts in PDP.cpp:1140 when a participant that leaves in order is removed
+  // while a peer's lease check for it runs, and a peer checks once per lease (docs/topics.md,
+  // "Short-lived participants").
+  std::chrono::seconds minimum_lease{0};
 };
 
 // A timeout as Fast DDS's waits take it: below zero is zero, beyond Duration_t's seconds its

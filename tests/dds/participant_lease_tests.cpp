@@ -1,0 +1,121 @@
+// The participant lease a peer hears, as Fast DDS announces it in discovery, inside a private
+// network namespace with the loopback profile (3 s lease): a participant made with a minimum
+// lease announces at least that, one without announces the profile's, and valvectl announces
+// its 30 s (docs/topics.md, "Short-lived participants").
+
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "support/eventually.hpp"
+#include "support/subprocess.hpp"
+#include "support/test_domain.hpp"
+#include "teejet/dds/participant.hpp"
+
+namespace teejet::dds {
+namespace {
+
+using namespace std::chrono_literals;
+using eprosima::fastdds::dds::DomainParticipant;
+using eprosima::fastdds::dds::DomainParticipantFactory;
+using teejet::testing::eventually;
+using teejet::testing::Subprocess;
+using teejet::testing::test_domain;
+
+constexpr auto kMeetingDeadline = 10s;
+
+// A bare Fast DDS participant that writes down the lease each peer announces, by peer name.
+class LeaseObserver final : public eprosima::fastdds::dds::DomainParticipantListener {
+ public:
+  explicit LeaseObserver(int domain) {
+    auto* factory = DomainParticipantFactory::get_instance();
+    participant_ =
+        factory->create_participant(static_cast<eprosima::fastdds::dds::DomainId_t>(domain),
+                                    factory->get_default_participant_qos(), this);
+  }
+  ~LeaseObserver() override {
+    if (participant_ != nullptr)
+      DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  }
+  LeaseObserver(const LeaseObserver&) = delete;
+  LeaseObserver& operator=(const LeaseObserver&) = delete;
+
+  bool made() const { return participant_ != nullptr; }
+
+  void on_participant_discovery(
+      DomainParticipant*, eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) {
+      return;
+    }
+    std::lock_guard lock(mutex_);
+    leases_[info.info.m_participantName.to_string()] = info.info.m_leaseDuration;
+  }
+
+  // The lease announced by the peer called `name`, once it was met within the deadline.
+  std::optional<eprosima::fastrtps::Duration_t> lease_of(const std::string& name) {
+    std::optional<eprosima::fastrtps::Duration_t> found;
+    eventually(
+        [&] {
+          std::lock_guard lock(mutex_);
+          if (auto it = leases_.find(name); it != leases_.end()) found = it->second;
+          return found.has_value();
+        },
+        kMeetingDeadline);
+    return found;
+  }
+
+ private:
+  DomainParticipant* participant_ = nullptr;
+  std::mutex mutex_;
+  std::map<std::string, eprosima::fastrtps::Duration_t> leases_;
+};
+
+TEST(ParticipantLease, AMinimumLeaseIsAnnouncedAboveTheProfilesAndNoneKeepsTheProfiles) {
+  LeaseObserver observer(test_domain());
+  ASSERT_TRUE(observer.made());
+  auto short_lived =
+      Participant::create({.domain = test_domain(), .name = "short-lived", .minimum_lease = 30s});
+  ASSERT_TRUE(short_lived) << short_lived.error().reason;
+  auto long_lived = Participant::create({.domain = test_domain(), .name = "long-lived"});
+  ASSERT_TRUE(long_lived) << long_lived.error().reason;
+  // Below the profile's, the profile's stands.
+  auto below = Participant::create(
+      {.domain = test_domain(), .name = "below-the-profile", .minimum_lease = 1s});
+  ASSERT_TRUE(below) << below.error().reason;
+
+  const auto announced = observer.lease_of("short-lived");
+  ASSERT_TRUE(announced) << "the participant with a minimum lease was not met";
+  EXPECT_EQ(announced->seconds, 30);
+  EXPECT_EQ(announced->nanosec, 0u);
+  // config/fastdds-loopback.xml, which tests/netns/isolated gives every test.
+  const auto profiles = observer.lease_of("long-lived");
+  ASSERT_TRUE(profiles) << "the participant without a minimum lease was not met";
+  EXPECT_EQ(profiles->seconds, 3);
+  const auto kept = observer.lease_of("below-the-profile");
+  ASSERT_TRUE(kept) << "the participant asking for less than the profile was not met";
+  EXPECT_EQ(kept->seconds, 3);
+}
+
+TEST(ParticipantLease, ValvectlAnnouncesAThirtySecondLease) {
+  LeaseObserver observer(test_domain());
+  ASSERT_TRUE(observer.made());
+  // `list` against a domain without a gateway looks for one for its whole --timeout.
+  Subprocess valvectl(
+      {VALVECTL_PATH, "--domain", std::to_string(test_domain()), "--timeout", "20", "list"});
+  const auto announced = observer.lease_of("valvectl");
+  ASSERT_TRUE(announced) << "valvectl's participant was not met";
+  EXPECT_EQ(announced->seconds, 30);
+  valvectl.signal(SIGINT);
+  valvectl.wait(20s);
+}
+
+}  // namespace
+}  // namespace teejet::dds
