@@ -32,6 +32,10 @@ client (web_client.py, standard library only) stands in for the page.
   starvation  60 slowloris requests and 48 idle pages: /api/valves and / still answer, the 49th
             page is refused, the idle pages and the slowloris connections are closed in time.
   handshakes  70 handshakes at once: exactly 48 pages with their snapshot.
+  stalled   the gateway stopped (SIGSTOP) under a page's first command, which waits up to 5 s
+            for the gateways to match teejet-web's command writer: meanwhile a second page gets
+            its snapshot (the first is not answered yet), then the first's answer says why its
+            command was not sent.
   tls       with its own CA and certificate (tools/pki web) and a token: trusting that CA only,
             GET /api/valves over https lists the 4 valves and a wss page's move reaches
             completed; plain http to the port gets 400 and no valve data; a client trusting
@@ -48,7 +52,9 @@ import argparse
 import http.client
 import json
 import os
+import select
 import shutil
+import signal
 import socket
 import ssl
 import subprocess
@@ -292,6 +298,33 @@ def pages():
                       ok=lambda page: page.status == SWITCHING)
     check(page.receive()["type"] == "snapshot", "the page that got in had no snapshot")
     print(f"{MAX_PAGES} pages served, the next refused ({extra.status!r}), a free place reused")
+
+
+def stalled():
+    wait_for_valves(WEB, 4, 15)
+    first = WebSocket()
+    check(first.receive()["type"] == "snapshot", "the first page had no snapshot")
+    os.kill(GATEWAY.pid, signal.SIGSTOP)
+    try:
+        first.send(json.dumps({"id": 1, "command": "stop", "serial": "TJV000001"}))
+        second = WebSocket()
+        check(second.status == SWITCHING, f"the second page: {second.status!r}")
+        check(second.receive()["type"] == "snapshot", "the second page had no snapshot")
+        # What reached the first page by then: updates maybe, its answer not (it comes when
+        # the 5 s are up, unless one page's command held every other page up).
+        early = []
+        while select.select([first.sock], [], [], 0.2)[0]:
+            early.append(first.receive())
+        check(all(message.get("id") != 1 for message in early),
+              f"the first page was answered before the second page got its snapshot: {early}")
+        answer = eventually(first.receive, 20, "the answer to the first page's command",
+                            ok=lambda message: message.get("id") == 1, interval=0)
+        errors = [sent.get("error", "") for sent in answer.get("commands", [])]
+        check(answer["type"] == "sent" and len(errors) == 1 and "(waited 5 s)" in errors[0],
+              f"the first page's command: {answer}")
+    finally:
+        os.kill(GATEWAY.pid, signal.SIGCONT)
+    print(f"a page got its snapshot while another's command waited; then: {errors[0]}")
 
 
 def move_completes(page, serial, degrees, seconds, token=None):
@@ -659,7 +692,7 @@ def tls():
 
 
 def main():
-    global WEB, WEB_LOG, WEB_BY_VARIABLE
+    global WEB, WEB_LOG, WEB_BY_VARIABLE, GATEWAY
     parser = argparse.ArgumentParser()
     parser.add_argument("--gateway", required=True)
     parser.add_argument("--web", required=True)
@@ -669,7 +702,7 @@ def main():
     gateway_log = open(os.path.join(work, "gateway.log"), "w")
     web_log_path = WEB_LOG = os.path.join(work, "web.log")
     web_args = [args.web, "--listen", f"127.0.0.1:{PORT}"]
-    if args.case in ("commands", "slowpage", "frames"):
+    if args.case in ("commands", "slowpage", "frames", "stalled"):
         web_args.append("--allow-commands")
     if args.case == "guards":
         web_args += ["--allowed-host", "Bench-PC"]
@@ -693,8 +726,8 @@ def main():
             [args.web, "--listen", f"127.0.0.1:{PORT + 1}", "--allow-commands"],
             env=dict(os.environ, TEEJET_WEB_TOKEN=TOKEN),
             stdout=open(os.path.join(work, "web-variable.log"), "w"), stderr=subprocess.STDOUT)
-    gateway = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
-                               stderr=subprocess.STDOUT)
+    gateway = GATEWAY = subprocess.Popen([args.gateway, "--can", "sim:4"], stdout=gateway_log,
+                                         stderr=subprocess.STDOUT)
     WEB = subprocess.Popen(web_args, stdout=open(web_log_path, "w"), stderr=subprocess.STDOUT,
                            env=environment)
     try:
@@ -720,7 +753,7 @@ def main():
 CASES = {"readonly": readonly, "commands": commands, "guards": guards, "token": token,
          "pages": pages, "slowpage": slowpage,
          "frames": frames, "oversize": oversize, "starvation": starvation,
-         "handshakes": handshakes, "hardening": hardening, "tls": tls}
+         "handshakes": handshakes, "hardening": hardening, "tls": tls, "stalled": stalled}
 
 if __name__ == "__main__":
     sys.exit(main())

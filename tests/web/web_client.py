@@ -141,10 +141,26 @@ class WebSocket:
 
     def answer(self, text, deadline_s=20):
         """Sends `text` and returns the answer, skipping the updates in between (they keep
-        coming, so each receive() is quick: only the deadline ends the wait)."""
+        coming, so each receive() is quick: only the deadline ends the wait). A status of what
+        the answer says was sent must not come before it: the page matches statuses to the ids
+        the answer gives it (AssertionError otherwise)."""
         self.send(text)
-        return eventually(self.receive, deadline_s, f"an answer to {text[:60]}",
-                          ok=lambda message: message["type"] in ("sent", "refused"), interval=0)
+        skipped = []
+
+        def next_message():
+            message = self.receive()
+            skipped.append(message)
+            return message
+
+        reply = eventually(next_message, deadline_s, f"an answer to {text[:60]}",
+                           ok=lambda message: message["type"] in ("sent", "refused"), interval=0)
+        commands = {c["command_id"] for c in reply.get("commands", []) if "command_id" in c}
+        changes = {c["change_id"] for c in reply.get("changes", []) if "change_id" in c}
+        early = [status for message in skipped[:-1] for status in message.get("statuses", [])
+                 if status.get("command_id") in commands or status.get("change_id") in changes]
+        if early:
+            raise AssertionError(f"statuses before the answer {reply} that gives their ids: {early}")
+        return reply
 
 
 def raw_http(port, path, host, extra=""):

@@ -26,6 +26,7 @@ Result<std::uint32_t> DdsSender::send(ValveCommand command) {
   command.command_id(*id);
   tracker_.on_sent(command);
   open_.insert(*id);
+  unanswered_.insert(*id);
   return *id;
 }
 
@@ -48,7 +49,21 @@ Result<std::uint32_t> DdsSender::send(LayoutChange change, const std::string& pa
   const auto id = layout_client_->send(change);
   if (!id) return Error{ErrorCode::kInvalidValue, "DDS did not take the layout change"};
   open_changes_.insert(*id);
+  std::lock_guard held(unanswered_changes_mutex_);
+  unanswered_changes_.insert(*id);
   return *id;
+}
+
+void DdsSender::answered(const std::vector<std::uint32_t>& command_ids,
+                         const std::vector<std::uint32_t>& change_ids) {
+  if (!command_ids.empty()) {
+    std::lock_guard lock(mutex_);
+    for (const auto id : command_ids) unanswered_.erase(id);
+  }
+  if (!change_ids.empty()) {
+    std::lock_guard lock(unanswered_changes_mutex_);
+    for (const auto id : change_ids) unanswered_changes_.erase(id);
+  }
 }
 
 DdsSender::Statuses DdsSender::take_statuses() {
@@ -60,6 +75,10 @@ std::vector<CommandStatus> DdsSender::take_command_statuses() {
   std::vector<CommandStatus> statuses;
   if (!client_) return statuses;
   for (auto it = open_.begin(); it != open_.end();) {
+    if (unanswered_.count(*it) != 0) {
+      ++it;
+      continue;
+    }
     bool final = false;
     while (const auto status = client_->next_status(*it, Clock::now())) {
       tracker_.on_status(*status);
@@ -78,7 +97,12 @@ std::vector<LayoutChangeStatus> DdsSender::take_layout_change_statuses() {
   std::vector<LayoutChangeStatus> statuses;
   std::unique_lock lock(layout_mutex_, std::try_to_lock);
   if (!lock || !layout_client_) return statuses;
+  std::lock_guard held(unanswered_changes_mutex_);
   for (auto it = open_changes_.begin(); it != open_changes_.end();) {
+    if (unanswered_changes_.count(*it) != 0) {
+      ++it;
+      continue;
+    }
     const auto status = layout_client_->next_status(*it, Clock::now());
     if (status) statuses.push_back(*status);
     it = status ? open_changes_.erase(it) : std::next(it);

@@ -27,8 +27,12 @@ class DdsSender final : public CommandSender {
   DdsSender(dds::Participant& participant, client::ValveView& view)
       : participant_(participant), view_(view) {}
 
+  // A command or change sent is held: its statuses wait in take_statuses() until answered()
+  // says the page has its answer (the command_id the page matches its statuses with).
   Result<std::uint32_t> send(ValveCommand command) override;
   Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override;
+  void answered(const std::vector<std::uint32_t>& command_ids,
+                const std::vector<std::uint32_t>& change_ids);
 
   // The statuses that arrived since the last call, in order; the tick hands them to every page.
   struct Statuses {
@@ -50,12 +54,17 @@ class DdsSender final : public CommandSender {
   std::mutex mutex_;
   std::unique_ptr<client::CommandClient> client_;
   TargetTracker tracker_;
-  std::set<std::uint32_t> open_;  // command ids not yet final
+  std::set<std::uint32_t> open_;        // command ids not yet final
+  std::set<std::uint32_t> unanswered_;  // of those, the ones whose page has no answer yet
   // Made on the first layout change, and each change waits for its gateway to match it: a
   // setup page may assign on a gateway that joined after the first change.
   std::mutex layout_mutex_;
   std::unique_ptr<client::LayoutClient> layout_client_;
-  std::set<std::uint32_t> open_changes_;  // change ids not yet answered
+  std::set<std::uint32_t> open_changes_;  // change ids the gateway has not answered
+  // Of those, the ones whose page has no answer yet. A lock of its own: answered() runs on the
+  // I/O thread, which must not wait for a send's match.
+  std::mutex unanswered_changes_mutex_;
+  std::set<std::uint32_t> unanswered_changes_;
 };
 
 }  // namespace teejet::web

@@ -321,6 +321,10 @@ struct Server::Impl {
   asio::steady_timer accept_retry{io};
   asio::executor_work_guard<asio::io_context::executor_type> work{io.get_executor()};
   std::thread thread;
+  // The pages' messages (commands, layout changes): Session::on_read.
+  asio::io_context commands{1};
+  asio::executor_work_guard<asio::io_context::executor_type> commands_work{commands.get_executor()};
+  std::thread commands_thread;
 };
 
 namespace {
@@ -339,6 +343,29 @@ class ConnectionSlot {
 
  private:
   Server::Impl* server_;
+};
+
+// The ids one page message was sent with, for DdsSender::answered once its answer is out.
+class SentIds final : public CommandSender {
+ public:
+  explicit SentIds(DdsSender& sender) : sender_(&sender) {}
+
+  Result<std::uint32_t> send(ValveCommand command) override {
+    auto id = sender_->send(std::move(command));
+    if (id) commands.push_back(*id);
+    return id;
+  }
+  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override {
+    auto id = sender_->send(std::move(change), participant);
+    if (id) changes.push_back(*id);
+    return id;
+  }
+
+  std::vector<std::uint32_t> commands;
+  std::vector<std::uint32_t> changes;
+
+ private:
+  DdsSender* sender_;
 };
 
 // A page's WebSocket. Admitted already: it holds one of kMaxPages from its construction to its
@@ -408,21 +435,41 @@ class PageSession final : public ServedPage, public std::enable_shared_from_this
       return;
     }
     if (socket_.got_text()) {
-      const std::string text = beast::buffers_to_string(input_.data());
-      const auto check_token = [this](std::string_view token) -> std::optional<std::string> {
-        const auto answer = server_.tokens.check(token_key(), token);
-        if (!answer.log.empty()) {
-          std::cerr << "teejet-web: " << answer.log << " (from " << peer_.address().to_string()
-                    << " port " << peer_.port() << ")\n";
-        }
-        if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
-        return TokenGuard::reason(answer);
-      };
-      deliver(handle_page_message(text, server_.view.snapshot(), server_.policy, server_.sender,
-                                  check_token));
+      // Handled on the commands thread, answered back here: a page's first command waits up to
+      // 5 s for the gateways to match the command writer, and no other page waits with it.
+      // One thread keeps every page's messages in the order they came. The statuses of what
+      // was sent wait in the sender until the answer is in the page's outbox: the page matches
+      // them to the command_id the answer gives it.
+      asio::post(server_.commands, [self = this->shared_from_this(),
+                                    text = beast::buffers_to_string(input_.data())]() mutable {
+        SentIds sent(self->server_.sender);
+        auto answer = self->answer(text, sent);
+        auto& io = self->server_.io;
+        // The session's last reference goes on the I/O thread, which owns its counters.
+        asio::post(io,
+                   [self = std::move(self), answer = std::move(answer), sent = std::move(sent)] {
+                     self->deliver(answer);
+                     self->server_.sender.answered(sent.commands, sent.changes);
+                   });
+      });
     }
     input_.consume(input_.size());
     read();
+  }
+
+  // On the commands thread: reads only what does not change after the page was accepted, the
+  // token guard (locked), the view and the sender (both thread-safe).
+  nlohmann::json answer(const std::string& text, CommandSender& sender) {
+    const auto check_token = [this](std::string_view token) -> std::optional<std::string> {
+      const auto answer = server_.tokens.check(token_key(), token);
+      if (!answer.log.empty()) {
+        std::cerr << "teejet-web: " << answer.log << " (from " << peer_.address().to_string()
+                  << " port " << peer_.port() << ")\n";
+      }
+      if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
+      return TokenGuard::reason(answer);
+    };
+    return handle_page_message(text, server_.view.snapshot(), server_.policy, sender, check_token);
   }
 
   void write_next() {
@@ -732,12 +779,16 @@ Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, clie
   }
   impl->accept();
   impl->thread = std::thread([&io = impl->io] { io.run(); });
+  impl->commands_thread = std::thread([&commands = impl->commands] { commands.run(); });
   return std::unique_ptr<Server>(new Server(std::move(impl)));
 }
 
 Server::Server(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
 Server::~Server() {
+  // A message being handled may still post its answer: the commands thread ends first.
+  impl_->commands.stop();
+  impl_->commands_thread.join();
   impl_->io.stop();
   impl_->thread.join();
 }
