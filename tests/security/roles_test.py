@@ -222,6 +222,11 @@ class Suite:
         leaver = self.profile_with_files(
             "leaver", {f"{self.site}/permissions.p7s": f"{stale}/permissions.p7s",
                        f"{self.site}/crl.pem": f"{stale}/crl.pem"})
+        # The same participant once it has the site's new CRL and permissions (its profile names
+        # the site's files, which the revocation rewrites): it cannot start.
+        informed = os.path.join(self.work, "leaver-informed.xml")
+        self.pki("profile", self.site, "leaver", "--base", self.base_for("bench"), "--out",
+                 informed)
         self.pki("revoke", self.site, "leaver")
         # Rotation: the key and certificate before `issue --replace` stay with their profile and
         # the CRL of that time (with the new CRL they would not even start).
@@ -249,6 +254,7 @@ class Suite:
         self.pki("profile", forged, "bench", "--base", self.base_for("bench"))
         self.profiles["forged"] = os.path.join(forged, "bench.xml")
         self.profiles["plain"] = self.base_for("bench")
+        self.profiles["leaver-informed"] = informed
 
     # ---- the cases ---------------------------------------------------------------------------
 
@@ -363,7 +369,8 @@ class Suite:
 
         # The refused participants look for the gateway meanwhile, each with its own deadline.
         refused = {}
-        for case in ("plain", "forged", "leaver", "late", "misfiled", "rotor-old"):
+        for case in ("plain", "forged", "leaver", "leaver-informed", "late", "misfiled",
+                     "rotor-old"):
             log = os.path.join(self.work, f"{case}.log")
             refused[case] = (log, self.hosts.spawn(
                 "bench", self.valvectl_argv(self.profiles[case], "list", "--wait-for", "4",
@@ -421,6 +428,9 @@ class Suite:
             "forged": (2, "no gateway found", "a certificate of another CA finds no gateway"),
             "leaver": (2, "no gateway found",
                        "a revoked certificate with its old permissions finds no gateway"),
+            "leaver-informed": (1, "certificate revoked in the CRL",
+                                "a revoked certificate with the new CRL cannot start a "
+                                "participant, and the error names revocation"),
             "late": (1, "cannot create a DDS participant",
                      "an expired certificate cannot start a participant"),
             "rotor-old": (2, "no gateway found",

@@ -136,8 +136,9 @@ Status Gateway::start() {
   // Named for top -H, perf and the benchmarks' per-thread CPU figures (15 characters at most).
   pthread_setname_np(reader_.native_handle(), "tj-bus-reader");
   pthread_setname_np(commander_.native_handle(), "tj-commands");
-  spdlog::info("gateway '{}' on {} in DDS domain {}{}", config_.bridge.gateway_name, config_.can,
-               config_.domain, frames_ ? ", every frame on teejet/can/frame" : "");
+  spdlog::info("gateway '{}' on {} in DDS domain {}{}; {}", config_.bridge.gateway_name,
+               config_.can, config_.domain, frames_ ? ", every frame on teejet/can/frame" : "",
+               participant_->setup());
   return {};
 }
 

@@ -99,6 +99,47 @@ std::vector<std::string> files_fast_dds_loads_itself() {
   return files;
 }
 
+// Fast DDS 2.x loads FASTRTPS_DEFAULT_PROFILES_FILE and ./DEFAULT_FASTRTPS_PROFILES.xml by
+// itself, and when it cannot it runs on its defaults — every interface, multicast, no
+// DDS-Security — with nothing but a log line (measured: a missing file, garbage, /dev/null, a
+// directory). Loaded here first, under the name Fast DDS will use, so that it finds them parsed
+// (it keeps each file it parsed) and a file that does not load stops the program instead.
+Status load_profiles_fast_dds_would_ignore() {
+  using eprosima::fastrtps::xmlparser::XMLP_ret;
+  using eprosima::fastrtps::xmlparser::XMLProfileManager;
+  const auto load = [](const std::string& file, const std::string& named_by) -> Status {
+    constexpr const char* kWouldRun =
+        ": the program would run on Fast DDS's defaults (every interface, multicast, no "
+        "DDS-Security)";
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(file, error)) {
+      const bool exists = std::filesystem::exists(file, error);
+      return refused(named_by + " names '" + file + "', which " +
+                     (exists ? "is not a regular file" : "does not exist") + kWouldRun +
+                     "; name the profiles file or unset it");
+    }
+    if (XMLProfileManager::loadXMLFile(file) != XMLP_ret::XML_OK) {
+      Log::Flush();  // its reasons first
+      return refused("Fast DDS cannot load the profiles of " + named_by + " ('" + file +
+                     "', the lines above say why)" + kWouldRun + "; mend the file or unset it");
+    }
+    return {};
+  };
+  namespace xml = eprosima::fastrtps::xmlparser;
+  const std::string variable = xml::DEFAULT_FASTRTPS_ENV_VARIABLE;
+  if (const char* file = std::getenv(variable.c_str()); file != nullptr && *file != '\0') {
+    if (auto loaded = load(file, variable); !loaded) return loaded;
+  }
+  const char* skip = std::getenv(xml::SKIP_DEFAULT_XML_FILE);
+  const std::string in_working_directory = xml::DEFAULT_FASTRTPS_PROFILES;
+  std::error_code error;
+  if ((skip == nullptr || skip[0] != '1') && std::filesystem::exists(in_working_directory, error)) {
+    return load(in_working_directory,
+                "the working directory's " + in_working_directory + " (Fast DDS reads it)");
+  }
+  return {};
+}
+
 // Fast DDS keeps profiles process-wide and refuses a file it has loaded before (duplicate
 // transport ids), so each file is loaded once per process, the environment's default included.
 Status load_profiles_once(const std::string& file) {
@@ -110,6 +151,7 @@ Status load_profiles_once(const std::string& file) {
   std::lock_guard lock(mutex);
   auto* factory = DomainParticipantFactory::get_instance();
   if (loaded.empty()) {
+    if (auto checked = load_profiles_fast_dds_would_ignore(); !checked) return checked;
     // Profiles load lazily: without this, default QoS would ignore the XML defaults.
     factory->load_profiles();
     loaded_by_fast_dds = files_fast_dds_loads_itself();
@@ -141,6 +183,37 @@ Status load_profiles_once(const std::string& file) {
   factory->set_default_participant_qos(PARTICIPANT_QOS_DEFAULT);
   loaded.insert(canonical(file));
   return {};
+}
+
+// Where the profiles in force came from, in the order Fast DDS lets them win.
+std::string profile_source(const std::string& profile_file) {
+  namespace xml = eprosima::fastrtps::xmlparser;
+  if (!profile_file.empty()) return "profile " + profile_file;
+  if (const char* file = std::getenv(xml::DEFAULT_FASTRTPS_ENV_VARIABLE);
+      file != nullptr && *file != '\0') {
+    return std::string("profile ") + file + " (" + xml::DEFAULT_FASTRTPS_ENV_VARIABLE + ")";
+  }
+  const char* skip = std::getenv(xml::SKIP_DEFAULT_XML_FILE);
+  std::error_code error;
+  if ((skip == nullptr || skip[0] != '1') &&
+      std::filesystem::exists(xml::DEFAULT_FASTRTPS_PROFILES, error)) {
+    return canonical(xml::DEFAULT_FASTRTPS_PROFILES) + " (the working directory's)";
+  }
+  return "Fast DDS's defaults (no profile: every interface, multicast)";
+}
+
+// The DDS-Security plugins a participant's properties ask for; empty when none.
+std::string security_plugins(const DomainParticipantQos& qos) {
+  std::string plugins;
+  for (const auto& property : qos.properties().properties()) {
+    for (const char* kind :
+         {"dds.sec.auth.plugin", "dds.sec.access.plugin", "dds.sec.crypto.plugin"}) {
+      if (property.name() == kind) {
+        plugins += (plugins.empty() ? "" : ", ") + property.value();
+      }
+    }
+  }
+  return plugins;
 }
 
 // Process-wide set-up before the first participant, while no Fast DDS thread runs yet.
@@ -198,8 +271,21 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   made->participant_ =
       factory->create_participant(static_cast<DomainId_t>(options.domain), qos,
                                   made->discovery_listener_.get(), StatusMask::none());
+  const std::string security = security_plugins(qos);
+  made->setup_ = profile_source(options.profile_file) + "; DDS-Security " +
+                 (security.empty() ? "off" : "on (" + security + ")");
   if (made->participant_ == nullptr) {
-    return refused("cannot create a DDS participant in domain " + std::to_string(options.domain));
+    std::string why = "cannot create a DDS participant in domain " +
+                      std::to_string(options.domain) + " (" + made->setup_ + ")";
+    if (!security.empty()) {
+      Log::Flush();  // Fast DDS's SECURITY lines first: they name the check that failed
+      why +=
+          ": with DDS-Security the likely causes are this participant's certificate revoked "
+          "in the CRL, expired or not yet valid, a key that is not the certificate's, an "
+          "unreadable CRL or CA file, or permissions that do not grant this domain "
+          "(docs/security.md)";
+    }
+    return refused(why);
   }
   made->publisher_ =
       made->participant_->create_publisher(made->participant_->get_default_publisher_qos());

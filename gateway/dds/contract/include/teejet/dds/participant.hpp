@@ -107,6 +107,9 @@ class Participant {
   // newcomer only at its next periodic announcement (the loopback profile's 250 ms), so until
   // then the participants met so far need not be all there are.
   bool discovery_settled() const;
+  // How DDS is set up, for the logs: "profile FILE (from --profile)" or "Fast DDS's defaults
+  // (no profile)", then "DDS-Security on (…)" or "DDS-Security off".
+  const std::string& setup() const { return setup_; }
   ~Participant();  // deletes every entity made here, then the participant
   Participant(const Participant&) = delete;
   Participant& operator=(const Participant&) = delete;
@@ -148,6 +151,7 @@ class Participant {
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+  std::string setup_;
 };
 
 }  // namespace teejet::dds
