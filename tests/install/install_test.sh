@@ -16,7 +16,10 @@ for f in bin/valve-decode bin/valve-sim bin/teejet-gateway bin/valvectl bin/teej
   share/teejet/idl/valve.idl include/teejet/valve.h \
   include/teejet/valvePubSubTypes.h include/teejet/valveTypeObject.h \
   include/teejet/codec/codec.hpp include/teejet/dds/participant.hpp \
-  include/teejet/client/valve_view.hpp lib/cmake/TeejetDds/TeejetDdsConfig.cmake; do
+  include/teejet/client/valve_view.hpp lib/cmake/TeejetDds/TeejetDdsConfig.cmake \
+  share/teejet/profiles/fastdds-loopback.xml share/teejet/profiles/fastdds-lan-discovery-client.xml \
+  share/teejet/gateway.example.yaml share/teejet/teejet-gateway.service \
+  share/teejet/security/governance.xml bin/teejet-pki; do
   [ -e "$scratch/prefix/$f" ] || { echo "FAIL: not installed: $f"; exit 1; }
 done
 
@@ -29,4 +32,12 @@ output=$("$scratch/consumer/consumer")
 decoded=$(echo '(1700000000.000123) can0 18EFD5D8#020384' | "$scratch/prefix/bin/valve-decode")
 expected='{"t":1700000000.000123,"iface":"can0","dir":"from_valve","addr":216,"msg":"position","fields":{"degrees":90.0}}'
 [ "$decoded" = "$expected" ] || { echo "FAIL: installed valve-decode printed '$decoded'"; exit 1; }
-echo "installed package: consumer built and ran, valve-decode decoded"
+# The installed teejet-pki finds its templates in the prefix: a site with a gateway's profile.
+"$scratch/prefix/bin/teejet-pki" init "$scratch/site" --site install-test >/dev/null
+"$scratch/prefix/bin/teejet-pki" issue "$scratch/site" gateway gw >/dev/null
+"$scratch/prefix/bin/teejet-pki" profile "$scratch/site" gw \
+  --base "$scratch/prefix/share/teejet/profiles/fastdds-loopback.xml" >/dev/null
+grep -q 'dds.sec.auth.plugin' "$scratch/site/gw.xml" ||
+  { echo "FAIL: the installed teejet-pki made no secure profile"; exit 1; }
+
+echo "installed package: consumer built and ran, valve-decode decoded, teejet-pki made a site"
