@@ -41,13 +41,25 @@ constexpr int kJogs = 2;
 constexpr milliseconds kJogTimeout{30000};
 // Longest wait before watch's first frame, so it does not start with an empty table.
 constexpr milliseconds kWatchFirstFrame{2000};
-// The lease valvectl announces: longer than most runs, so that the gateways and the other
-// clients rarely check it before it leaves (Fast DDS 2.9.1 may abort a peer that removes a
-// leaving participant while checking its lease; docs/topics.md, "Short-lived participants").
+// The lease valvectl announces: longer than the run, so that the gateways and the other
+// clients never check it before it leaves (Fast DDS 2.9.1 may abort a peer that removes a
+// leaving participant while checking its lease; docs/topics.md, "Short-lived participants"):
+// at least 30 s, and 10 s more than a run may wait in all (watch and its Ctrl-C excepted).
 // valvectl's fail-safe does not rest on it: a run that is killed leaves no valve running for
 // long (moves and jogs end by themselves; `manual` exits once the valve runs, as it would in
 // order), and its command writer's liveliness (2 s) reports it when it is the only commander.
 constexpr std::chrono::seconds kValvectlLease{30};
+constexpr std::chrono::seconds kLeaseBeyondTheRun{10};
+
+std::chrono::seconds lease_for(const Invocation& invocation) {
+  std::chrono::milliseconds longest = invocation.global.timeout;
+  if (invocation.subcommand == Subcommand::kCommand && invocation.command.wait) {
+    longest += invocation.command.wait_timeout;
+  }
+  if (invocation.subcommand == Subcommand::kIdentify) longest += 2 * kJogs * kJogTimeout;
+  return std::max(kValvectlLease,
+                  std::chrono::ceil<std::chrono::seconds>(longest) + kLeaseBeyondTheRun);
+}
 
 bool shows_progress(CommandKind kind) {
   return kind == COMMAND_TARGET_DEGREES || kind == COMMAND_DEGREES_FROM_POSITION ||
@@ -78,7 +90,7 @@ class Session {
     auto participant = dds::Participant::create({.domain = invocation.global.domain,
                                                  .profile_file = invocation.global.profile_file,
                                                  .name = "valvectl",
-                                                 .minimum_lease = kValvectlLease});
+                                                 .minimum_lease = lease_for(invocation)});
     if (!participant) return participant.error();
     auto view = ValveView::create(**participant);
     if (!view) return view.error();
