@@ -242,10 +242,13 @@ std::unique_ptr<AnyReader> open(teejet::dds::Participant& participant, bool reli
   DataReaderQos qos = teejet::dds::topics::state_reader_qos();
   qos.reliability().kind = reliable ? RELIABLE_RELIABILITY_QOS : BEST_EFFORT_RELIABILITY_QOS;
   qos.durability().kind = transient ? TRANSIENT_LOCAL_DURABILITY_QOS : VOLATILE_DURABILITY_QOS;
-  qos.history().depth = 4096;
-  qos.resource_limits().max_samples_per_instance = 4096;
-  qos.resource_limits().max_instances = 64;
-  qos.resource_limits().max_samples = 64 * 4096;
+  // Every instance of a scale run (256 valves, six error kinds each, up to 4096 as the
+  // contract's readers), each as deep as the recorder's readers: the judge of a recording must
+  // not be the one that drops (64 instances once kept most of eight gateways' valves out).
+  qos.history().depth = 256;
+  qos.resource_limits().max_samples_per_instance = 256;
+  qos.resource_limits().max_instances = 4096;
+  qos.resource_limits().max_samples = 4096 * 256;
   auto reader = participant.reader(*topic, qos, nullptr, StatusMask::none());
   if (!reader) throw std::runtime_error(reader.error().reason);
   auto logger = std::make_unique<TypedLogger<Sample>>();

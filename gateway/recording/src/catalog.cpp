@@ -30,9 +30,13 @@ enum class Kind {
 
 // The recorder's readers keep this many samples per instance that it has not taken yet: a
 // state writer keeps only the last, but a recorder must not lose the one before it while it
-// writes a chunk. Bounded, so that a stalled recorder cannot eat memory without limit.
-// Frames keep the frame reader's own QoS (best effort, 8192 held: about 3 s of a full bus).
-constexpr std::int32_t kRecorderDepth = 64;
+// writes a chunk, nor while it waits for a CPU: 256 are 25 s of a valve's positions at the
+// full poll rate (64 were 6.4 s). What reaches a starved recorder only after the writer has a
+// newer sample of that instance is lost to it as to any reader (docs/performance.md, "Scale").
+// Bounded, so that a stalled recorder cannot eat memory without limit: a backlog of every
+// instance costs about 80 kB per instance and topic. Frames keep the frame reader's own QoS
+// (best effort, 8192 held: about 3 s of a full bus).
+constexpr std::int32_t kRecorderDepth = 256;
 
 DataReaderQos recorder_qos(Kind kind) {
   DataReaderQos qos;
