@@ -13,6 +13,7 @@ Cases (docs/remote-benches.md):
   discovery      routed, fastdds-lan-discovery-client.xml with a discovery server on the vehicle;
                  also ROS_DISCOVERY_SERVER with the multicast profile (what Fast DDS 2.9.1 allows)
   tcp            routed, fastdds-wan-tcp-gateway.xml / fastdds-wan-tcp-bench.xml
+  tcp-starts     the same, --starts lone valvectl lists one after another (a measurement)
 
 Run under tests/network/lab-run (with --uml for --netem). Exit 77 where no lab can be built.
 """
@@ -241,12 +242,37 @@ def case_tcp(bench):
     bench.lists_all_valves("bench2", tcp_bench)
 
 
+def case_tcp_starts(bench):
+    """Not in CTest (docs/remote-benches.md, "Measurements"): --starts lone `valvectl list`
+    from the bench over TCP, one after another, each given 5 s: how many find no gateway."""
+    bench.start_gateway(profile("fastdds-wan-tcp-gateway.xml"))
+    tcp_bench = profile("fastdds-wan-tcp-bench.xml")
+    bench.lists_all_valves("bench", tcp_bench)
+    endings, took = {}, []
+    for n in range(bench.args.starts):
+        started = time.monotonic()
+        result = bench.valvectl("bench", tcp_bench, "list", "--wait-for", "4", timeout_s=5,
+                                attempts=1)
+        took.append(time.monotonic() - started)
+        endings[result.returncode] = endings.get(result.returncode, 0) + 1
+        if result.returncode != 0:
+            say(f"start {n + 1}: exit {result.returncode}: {result.stderr.strip()[-200:]}")
+    took.sort()
+    say(f"TCP STARTS {bench.args.starts}: exit statuses {endings}; run p50 "
+        f"{took[len(took) // 2]:.2f} s, p90 {took[int(len(took) * 0.9)]:.2f} s, "
+        f"max {took[-1]:.2f} s")
+    check(endings.get(0, 0) == bench.args.starts,
+          f"{bench.args.starts - endings.get(0, 0)} of {bench.args.starts} starts did not list "
+          f"the 4 valves: {endings}")
+
+
 # name: (topology, run, attempts a bench participant gets)
 CASES = {
     "plain": ("bridged", case_plain, 1),
     "plain-routed": ("routed", case_plain_routed, 1),
     "discovery": ("routed", case_discovery, 1),
     "tcp": ("routed", case_tcp, 3),
+    "tcp-starts": ("routed", case_tcp_starts, 1),
 }
 
 
@@ -258,6 +284,7 @@ def main():
     parser.add_argument("--record", required=True, help="the teejet-record binary")
     parser.add_argument("--discovery-server", default="fast-discovery-server")
     parser.add_argument("--netem", help='e.g. "delay 50ms loss 1%%" (routed cases, under --uml)')
+    parser.add_argument("--starts", type=int, default=100, help="tcp-starts: how many")
     args = parser.parse_args()
     topology, run, attempts = CASES[args.case]
     if args.case == "discovery" and shutil.which(args.discovery_server) is None:
