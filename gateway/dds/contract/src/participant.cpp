@@ -83,18 +83,35 @@ std::string canonical(const std::string& path) {
 
 Error refused(std::string what) { return Error{ErrorCode::kDds, std::move(what)}; }
 
+namespace xml = eprosima::fastrtps::xmlparser;
+
+// What Fast DDS 2.x reads by itself: the file the environment names (nullptr: none)...
+const char* environment_profiles_file() {
+  const char* file = std::getenv(xml::DEFAULT_FASTRTPS_ENV_VARIABLE);
+  return file != nullptr && *file != '\0' ? file : nullptr;
+}
+
+// ... and ./DEFAULT_FASTRTPS_PROFILES.xml, unless SKIP_DEFAULT_XML_FILE=1.
+bool reads_working_directory_profiles() {
+  const char* skip = std::getenv(xml::SKIP_DEFAULT_XML_FILE);
+  std::error_code error;
+  return (skip == nullptr || skip[0] != '1') &&
+         std::filesystem::exists(xml::DEFAULT_FASTRTPS_PROFILES, error);
+}
+
 // The files Fast DDS loads by itself before any of ours: the environment's and the working
-// directory's (measured with 2.9.1: both, in that order).
+// directory's (measured with 2.9.1: both, in that order); and Fast DDS 3's variable, which the
+// tests set to the same file.
 std::vector<std::string> files_fast_dds_loads_itself() {
   std::vector<std::string> files;
-  for (const char* variable : {"FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE"}) {
-    const char* file = std::getenv(variable);
-    if (file && *file && std::find(files.begin(), files.end(), canonical(file)) == files.end()) {
-      files.push_back(canonical(file));
-    }
+  if (const char* file = environment_profiles_file()) files.push_back(canonical(file));
+  const char* later = std::getenv("FASTDDS_DEFAULT_PROFILES_FILE");
+  if (later != nullptr && *later != '\0' &&
+      std::find(files.begin(), files.end(), canonical(later)) == files.end()) {
+    files.push_back(canonical(later));
   }
-  if (std::filesystem::exists("DEFAULT_FASTRTPS_PROFILES.xml")) {
-    files.push_back(canonical("DEFAULT_FASTRTPS_PROFILES.xml"));
+  if (reads_working_directory_profiles()) {
+    files.push_back(canonical(xml::DEFAULT_FASTRTPS_PROFILES));
   }
   return files;
 }
@@ -125,17 +142,13 @@ Status load_profiles_fast_dds_would_ignore() {
     }
     return {};
   };
-  namespace xml = eprosima::fastrtps::xmlparser;
-  const std::string variable = xml::DEFAULT_FASTRTPS_ENV_VARIABLE;
-  if (const char* file = std::getenv(variable.c_str()); file != nullptr && *file != '\0') {
-    if (auto loaded = load(file, variable); !loaded) return loaded;
+  if (const char* file = environment_profiles_file()) {
+    if (auto loaded = load(file, xml::DEFAULT_FASTRTPS_ENV_VARIABLE); !loaded) return loaded;
   }
-  const char* skip = std::getenv(xml::SKIP_DEFAULT_XML_FILE);
-  const std::string in_working_directory = xml::DEFAULT_FASTRTPS_PROFILES;
-  std::error_code error;
-  if ((skip == nullptr || skip[0] != '1') && std::filesystem::exists(in_working_directory, error)) {
-    return load(in_working_directory,
-                "the working directory's " + in_working_directory + " (Fast DDS reads it)");
+  if (reads_working_directory_profiles()) {
+    return load(xml::DEFAULT_FASTRTPS_PROFILES, std::string("the working directory's ") +
+                                                    xml::DEFAULT_FASTRTPS_PROFILES +
+                                                    " (Fast DDS reads it)");
   }
   return {};
 }
@@ -187,17 +200,12 @@ Status load_profiles_once(const std::string& file) {
 
 // Where the profiles in force came from, in the order Fast DDS lets them win.
 std::string profile_source(const std::string& profile_file) {
-  namespace xml = eprosima::fastrtps::xmlparser;
   if (!profile_file.empty()) return "profile " + profile_file;
-  if (const char* file = std::getenv(xml::DEFAULT_FASTRTPS_ENV_VARIABLE);
-      file != nullptr && *file != '\0') {
+  if (const char* file = environment_profiles_file()) {
     return std::string("profile ") + file + " (" + xml::DEFAULT_FASTRTPS_ENV_VARIABLE + ")";
   }
-  const char* skip = std::getenv(xml::SKIP_DEFAULT_XML_FILE);
-  std::error_code error;
-  if ((skip == nullptr || skip[0] != '1') &&
-      std::filesystem::exists(xml::DEFAULT_FASTRTPS_PROFILES, error)) {
-    return canonical(xml::DEFAULT_FASTRTPS_PROFILES) + " (the working directory's)";
+  if (reads_working_directory_profiles()) {
+    return "profile " + canonical(xml::DEFAULT_FASTRTPS_PROFILES) + " (the working directory's)";
   }
   return "Fast DDS's defaults (no profile: every interface, multicast)";
 }
