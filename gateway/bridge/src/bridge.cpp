@@ -888,11 +888,11 @@ void Bridge::apply(const isobus::ClaimReaction& reaction) {
 
 void Bridge::reclaim_after_recovery(SteadyTime now) {
   const auto bus = bus_.statistics();
-  const bool recovered =
-      !cut_off(bus.state) &&
-      (cut_off(bus_state_seen_) || bus.outages != outages_seen_ || bus.reopens != reopens_seen_);
+  const bool was_cut_off = cut_off(bus_state_seen_);
   bus_state_seen_ = bus.state;
   if (cut_off(bus.state)) return;  // claimed once it is back
+  const bool recovered =
+      was_cut_off || bus.outages != outages_seen_ || bus.reopens != reopens_seen_;
   outages_seen_ = bus.outages;
   reopens_seen_ = bus.reopens;
   if (!recovered || !config_.isobus.claim) return;

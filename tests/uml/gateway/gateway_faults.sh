@@ -30,16 +30,10 @@ measures="$work/measures"
 now() { date +%s%6N; }
 seconds_since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.2f", (b - a) / 1e6 }'; }
 measure() { echo "measure: $*" | tee -a "$measures"; }
-section() { echo "== $* (at ${SECONDS} s)"; }
-lines() { if [ -e "$1" ]; then wc -l <"$1"; else echo 0; fi; }
-# after FILE LINE PATTERN: PATTERN (extended regex) in FILE after its first LINE lines.
-after() { tail -n +"$(($2 + 1))" "$1" | grep -Eq "$3"; }
 log_count() { grep -Fc "$1" "$gateway_log" || true; }
 # The bus state in a GatewayStatus shown by valvectl watch after LINE of its output.
 status_after() { after "$watch_log" "$1" "gateway .* on vcan0: $2,"; }
 online() { "$valvectl" --domain "$domain" --timeout 3 list --wait-for 3 >/dev/null 2>&1; }
-# A child that has exited stays a zombie until waited for: kill -0 would still find it.
-exited() { [ ! -e "/proc/$1" ] || [ "$(awk '{print $3}' "/proc/$1/stat" 2>/dev/null)" = Z ]; }
 candump_pid=
 record_wire() {  # candump ends when its link goes down or away: then a new one
   if [ -n "$candump_pid" ] && ! exited "$candump_pid"; then return 0; fi

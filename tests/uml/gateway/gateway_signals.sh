@@ -22,8 +22,6 @@ all_polled_after() {  # the gateway asked every valve for its position: it knows
   local address
   for address in "${addresses[@]}"; do on_wire_after "$1" "18EF${address}D5#11" || return 1; done
 }
-# A child that has exited stays a zombie until waited for: kill -0 would still find it.
-exited() { [ ! -e "/proc/$1" ] || [ "$(awk '{print $3}' "/proc/$1/stat" 2>/dev/null)" = Z ]; }
 
 # Unbuffered: a frame is in the file as soon as candump has it, not when a block fills.
 stdbuf -o0 candump -L vcan0 >"$work/wire.log" &

@@ -1,8 +1,8 @@
 # shellcheck shell=bash
 # Sourced by the gateway scripts that run inside user-mode-linux, after `build` and `repo` are
 # set: the programs, the loopback DDS profile, a scratch directory ($work) whose processes
-# ($pids) are ended on exit (with $end_signal, TERM unless the script sets another), check()
-# and eventually().
+# ($pids) are ended on exit (with $end_signal, TERM unless the script sets another), check(),
+# eventually() and the helpers below (exited, lines, after, section).
 
 sim="$build/tools/valve-sim/valve-sim"
 gateway="$build/gateway/app/teejet-gateway"
@@ -34,3 +34,11 @@ check() {
 }
 # shellcheck source=tools/lib/eventually.sh
 source "$repo/tools/lib/eventually.sh"
+
+# A child that has exited stays a zombie until waited for: kill -0 would still find it.
+exited() { [ ! -e "/proc/$1" ] || [ "$(awk '{print $3}' "/proc/$1/stat" 2>/dev/null)" = Z ]; }
+# lines FILE: how many lines it has (0 before it exists).
+lines() { if [ -e "$1" ]; then wc -l <"$1"; else echo 0; fi; }
+# after FILE LINE REGEX: REGEX (extended) in FILE after its first LINE lines.
+after() { tail -n +"$(($2 + 1))" "$1" | grep -Eq -- "$3"; }
+section() { echo "== $* (at ${SECONDS} s)"; }

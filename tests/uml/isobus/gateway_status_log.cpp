@@ -1,6 +1,7 @@
 // Test peer for address_claim.sh: every GatewayStatus the gateways of a domain publish, one line
 // each, so that a script can wait for what the gateway says about its address claim. valvectl
-// does not show the ISOBUS fields (yet); this reads them from the generated type itself:
+// shows the same fields to people once per refresh, which can miss the 250 ms of CLAIM_CLAIMING;
+// this prints every sample, read from the generated type itself:
 //   status gateway=G bus=error_active claim=claimed address=0xD5 name=0x200880000541B2C3
 //     holder=0x0000000000000000 violations=0 valve_range_claims=0 frames_in=N frames_out=N
 //     decode_errors=0 neighbours=0x80:0xA00C81045A20021B,0xE0:0x...

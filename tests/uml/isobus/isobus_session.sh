@@ -16,8 +16,6 @@ gateway_log="$work/gateway.log"
 status_log="$work/status.log"
 kernel_log="$work/kernel.log"
 
-# A child that has exited stays a zombie until waited for: kill -0 would still find it.
-exited() { [ ! -e "/proc/$1" ] || [ "$(awk '{print $3}' "/proc/$1/stat" 2>/dev/null)" = Z ]; }
 # Every process ends on SIGTERM within 5 s or is named and killed: a J1939 socket can keep its
 # owner in the kernel, and a test that hangs in its cleanup says nothing about why.
 cleanup() {
@@ -66,9 +64,6 @@ hex='[0-9A-F]'
 from_d5="vcan0 $hex$hex$hex$hex$hex${hex}D5#"
 # shellcheck disable=SC2034
 poll="vcan0 18EF(D[89A-F]|E$hex|F[0-7])D5#"
-lines() { if [ -e "$1" ]; then wc -l <"$1"; else echo 0; fi; }
-# after FILE LINE REGEX: REGEX in FILE after its first LINE lines.
-after() { tail -n +"$(($2 + 1))" "$1" | grep -Eq -- "$3"; }
 not_after() { ! after "$@"; }
 # first_after FILE LINE REGEX: the number of the first line after LINE that matches, or nothing.
 # (awk reads to the end: a reader that stops early would fail the pipeline.)
@@ -176,7 +171,6 @@ move() {  # TARGET [OPTIONS...]: valvectl's exit status and output on one line
   output=$("$valvectl" --domain "$domain" --timeout 20 move TJV000002 --to "$@" 2>&1) || rc=$?
   echo "$rc $(echo "$output" | tr '\n' '|')"
 }
-section() { echo "== $* (at ${SECONDS} s)"; }
 # report: the count, the gateway's claiming log, and on failure what each party said.
 report() {
   echo "$failures failed"
