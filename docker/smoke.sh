@@ -6,7 +6,8 @@
 #
 # Steps: installs podman, buildah, debootstrap and runc when missing; makes a Debian bookworm
 # base image with `debootstrap --variant=minbase` from this host's mirror (cached in
-# $TEEJET_SMOKE_CACHE, default /var/cache/teejet-smoke, and as a local image: a second run
+# $TEEJET_CONTAINER_CACHE, default /var/cache/teejet-containers, and as a local image, shared
+# with tools/package: tools/lib/container.sh; a second run
 # skips it); builds the Dockerfile on it; reports the image size and the build time; runs the
 # image with --network none (its own loopback only: DDS traffic never leaves the container).
 # Only `podman build` gets the host network, for apt's package downloads; no DDS program runs
@@ -17,19 +18,11 @@
 set -euo pipefail
 
 REPO_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-CACHE="${TEEJET_SMOKE_CACHE:-/var/cache/teejet-smoke}"
-BASE_IMAGE="localhost/teejet-bookworm-minbase:latest"
+# shellcheck source=tools/lib/container.sh
+source "$REPO_ROOT/tools/lib/container.sh"
 IMAGE="localhost/teejet-dds-gateway:smoke"
 # Size the runtime image must stay under (docker/README.md).
 MAX_IMAGE_MB=300
-# This sandbox needs runc and explicit limits: Podman's defaults (nofile 1048576) exceed the
-# hard limits runc may set here, and so does an nproc of 65536 even under a higher hard limit.
-# This shell's own open-file limit, and at most 32768 processes.
-PODMAN=(podman --runtime runc)
-nofile=$(ulimit -Hn) nproc=$(ulimit -Hu)
-[[ "$nproc" == unlimited ]] || ((nproc > 32768)) && nproc=32768
-ULIMITS=(--ulimit "nofile=$nofile:$nofile" --ulimit "nproc=$nproc:$nproc")
-RUN=("${PODMAN[@]}" run --rm --network none "${ULIMITS[@]}")
 
 log() { printf 'smoke: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
@@ -52,76 +45,23 @@ summary() {
 }
 trap summary EXIT
 
-# --- tools --------------------------------------------------------------------------------------
-missing=()
-for pkg in podman buildah debootstrap runc; do
-  [[ "$(dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null || true)" == "install ok installed" ]] ||
-    missing+=("$pkg")
-done
-if ((${#missing[@]} > 0)); then
-  log "installing ${missing[*]}"
-  DEBIAN_FRONTEND=noninteractive apt-get update
-  DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends "${missing[@]}"
-fi
+# --- tools ---------------------------------------------------------------------------------------
+tj_podman_setup
+RUN=("${PODMAN[@]}" run --rm --network none "${TJ_ULIMITS[@]}")
 
 log "disk space:"
 df -h /var >&2
 avail_kb=$(df --output=avail -k /var | tail -1)
 ((avail_kb > 8 * 1024 * 1024)) || die "less than 8 GB free on /var: the build needs ~4 GB"
 
-# Overlay when the kernel allows it, vfs (slow, large, but works everywhere) otherwise.
-if ! "${PODMAN[@]}" info >/dev/null 2>&1; then
-  log "podman does not start with its default storage: using --storage-driver vfs"
-  PODMAN+=(--storage-driver vfs)
-  RUN=("${PODMAN[@]}" run --rm --network none "${ULIMITS[@]}")
-fi
-
 # --- base image ---------------------------------------------------------------------------------
-# The first URIs of this host's debian.sources (e.g. a snapshot or a local mirror).
-mirror() {
-  local sources=/etc/apt/sources.list.d/debian.sources uri=""
-  [[ -f "$sources" ]] && uri=$(awk '/^URIs:/ {print $2; exit}' "$sources")
-  printf '%s\n' "${uri:-http://deb.debian.org/debian}"
-}
-
-tarball="$CACHE/bookworm-minbase.tar"
-if "${PODMAN[@]}" image exists "$BASE_IMAGE"; then
-  log "base image $BASE_IMAGE exists"
-else
-  if [[ ! -s "$tarball" ]]; then
-    mkdir -p "$CACHE"
-    rootfs="$CACHE/rootfs.tmp"
-    rm -rf "$rootfs"
-    log "debootstrap --variant=minbase bookworm from $(mirror)"
-    debootstrap --variant=minbase bookworm "$rootfs" "$(mirror)" >"$CACHE/debootstrap.log" 2>&1 ||
-      die "debootstrap failed: see $CACHE/debootstrap.log"
-    # Slim like debian:bookworm-slim: no downloaded .debs, package lists (the Dockerfile runs
-    # apt-get update itself), manuals or translations, neither now nor in later installs.
-    rm -rf "$rootfs"/var/lib/apt/lists/* "$rootfs"/var/cache/apt/*.bin \
-      "$rootfs"/var/cache/apt/archives/*.deb
-    cat >"$rootfs/etc/dpkg/dpkg.cfg.d/docker-slim" <<'EOF'
-path-exclude /usr/share/doc/*
-path-include /usr/share/doc/*/copyright
-path-exclude /usr/share/man/*
-path-exclude /usr/share/info/*
-path-exclude /usr/share/locale/*
-EOF
-    # Files only: packages' scripts expect the directories (openjdk's postinst links into man1).
-    find "$rootfs"/usr/share/doc -mindepth 2 ! -name copyright ! -type d -delete
-    find "$rootfs"/usr/share/man "$rootfs"/usr/share/info "$rootfs"/usr/share/locale \
-      ! -type d -delete
-    tar -C "$rootfs" --numeric-owner -cf "$tarball.tmp" .
-    mv "$tarball.tmp" "$tarball"
-    rm -rf "$rootfs"
-  fi
-  log "importing $tarball as $BASE_IMAGE"
-  "${PODMAN[@]}" import --change 'CMD ["bash"]' "$tarball" "$BASE_IMAGE" >/dev/null
-fi
+BASE_IMAGE=$(tj_debian_base_image)
+log "base image $BASE_IMAGE"
 
 # --- build --------------------------------------------------------------------------------------
 log "building $IMAGE (the first build compiles everything: ~10-20 min on 2 cores)"
 start=$SECONDS
-if "${PODMAN[@]}" build --network host "${ULIMITS[@]}" --build-arg "BASE_IMAGE=$BASE_IMAGE" \
+if "${PODMAN[@]}" build --network host "${TJ_ULIMITS[@]}" --build-arg "BASE_IMAGE=$BASE_IMAGE" \
   -f "$REPO_ROOT/docker/Dockerfile" -t "$IMAGE" "$REPO_ROOT"; then
   pass "podman build (OCI format) in $((SECONDS - start)) s"
 else
