@@ -79,6 +79,13 @@ PACKAGES=(
   ccache
   # DDS-Security material (tools/pki): the openssl command line
   openssl
+  # Debian packages (tools/package/build): Debian's packaging tools, the man pages made from each
+  # program's --help, and lintian, which CI runs on the packages
+  dpkg-dev
+  debhelper
+  fakeroot
+  help2man
+  lintian
   # (Node and npm for tests/mcap-js and tools/teejet-web/qr: see NODE_PACKAGES below)
   # the QR code of a valve's serial, for the dashboard's camera test (tests/web/qr_video.py)
   qrencode
@@ -90,30 +97,16 @@ PACKAGES=(
 )
 
 # What configuring the release preset with BUILD_TESTING=OFF and compiling the programs needs
-# (docker/Dockerfile's builder stage): a subset of PACKAGES. libbenchmark-dev because bench/
-# is configured unconditionally; fastddsgen and its JRE generate the DDS types at build time.
-BUILD_PACKAGES=(
-  cmake
-  gcc
-  g++
-  ninja-build
-  pkg-config
-  fastddsgen
-  default-jre-headless
-  libfastrtps-dev
-  libfastcdr-dev
-  libbenchmark-dev
-  libcli11-dev
-  libspdlog-dev
-  libfmt-dev
-  libyaml-cpp-dev
-  nlohmann-json3-dev
-  libboost-dev
-  libssl-dev
-  libzstd-dev
-  liblz4-dev
-  zlib1g-dev
-)
+# (docker/Dockerfile's builder stage, tools/package/build): a compiler and the Build-Depends of
+# tools/package/debian/control, the one list of them, less what only makes the packages.
+SOURCE_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+CONTROL="$SOURCE_ROOT/tools/package/debian/control"
+build_depends() {
+  [[ -f "$CONTROL" ]] || die "$CONTROL is missing: it lists what building needs"
+  sed -n '/^Build-Depends:/,/^[A-Z]/{s/^Build-Depends://;/^[A-Z]/d;p}' "$CONTROL" |
+    tr ',' '\n' | sed -e 's/([^)]*)//g' -e 's/:native//' -e 's/[[:space:]]//g' |
+    grep -v -e '^$' -e '^debhelper-compat$' -e '^help2man$'
+}
 
 # Node (18 or newer) and npm run the independent MCAP reader of tests/mcap-js and fetch the QR
 # decoder teejet-web serves (tools/teejet-web/qr; without it the page's setup view offers no
@@ -123,8 +116,6 @@ BUILD_PACKAGES=(
 NODE_PACKAGES=()
 command -v node >/dev/null 2>&1 || NODE_PACKAGES+=(nodejs)
 command -v npm >/dev/null 2>&1 || NODE_PACKAGES+=(npm)
-
-SOURCE_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
 log() { printf 'install-deps: %s\n' "$*" >&2; }
 die() { log "error: $*"; exit 1; }
@@ -143,7 +134,8 @@ for arg in "$@"; do
 done
 
 if ((build_only)); then
-  PACKAGES=("${BUILD_PACKAGES[@]}")
+  mapfile -t PACKAGES < <(printf '%s\n' gcc g++ && build_depends)
+  ((${#PACKAGES[@]} > 10)) || die "could not read the Build-Depends of $CONTROL"
 else
   PACKAGES+=("${NODE_PACKAGES[@]}")
 fi
