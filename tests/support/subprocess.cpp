@@ -49,11 +49,25 @@ ssize_t write_without_sigpipe(int fd, std::string_view data) {
   return written;
 }
 
+// A cross build (tools/package/check-arm64) runs the programs it built through the emulator CMake
+// runs the tests with; the machine's own programs run as they are.
+std::vector<std::string> through_emulator(const std::vector<std::string>& argv) {
+#ifdef TEEJET_TEST_EMULATOR
+  if (argv[0].rfind(TEEJET_TEST_BUILD_DIR "/", 0) == 0) {
+    std::vector<std::string> emulated{TEEJET_TEST_EMULATOR};
+    emulated.insert(emulated.end(), argv.begin(), argv.end());
+    return emulated;
+  }
+#endif
+  return argv;
+}
+
 }  // namespace
 
-Subprocess::Subprocess(const std::vector<std::string>& argv, Input input)
+Subprocess::Subprocess(const std::vector<std::string>& program_argv, Input input)
     : input_is_pipe_(input == Input::kPipe) {
-  if (argv.empty()) throw std::invalid_argument("Subprocess: no program");
+  if (program_argv.empty()) throw std::invalid_argument("Subprocess: no program");
+  const auto argv = through_emulator(program_argv);
   int in_pipe[2] = {-1, -1};
   int out_pipe[2] = {-1, -1};
   int err_pipe[2] = {-1, -1};
