@@ -244,14 +244,19 @@ def case_tcp(bench):
 
 def case_tcp_starts(bench):
     """Not in CTest (docs/remote-benches.md, "Measurements"): --starts lone `valvectl list`
-    from the bench over TCP, one after another, each given 5 s: how many find no gateway."""
+    from the bench over TCP, one after another, each given 5 s: how many find no gateway.
+    --with-recorder: a teejet-record on the bench meanwhile, the valvectls from bench2."""
     bench.start_gateway(profile("fastdds-wan-tcp-gateway.xml"))
     tcp_bench = profile("fastdds-wan-tcp-bench.xml")
     bench.lists_all_valves("bench", tcp_bench)
+    host = "bench"
+    if bench.args.with_recorder:
+        bench.start_recorder(tcp_bench, os.path.join(bench.scratch, "beside.mcap"))
+        host = "bench2"
     endings, took = {}, []
     for n in range(bench.args.starts):
         started = time.monotonic()
-        result = bench.valvectl("bench", tcp_bench, "list", "--wait-for", "4", timeout_s=5,
+        result = bench.valvectl(host, tcp_bench, "list", "--wait-for", "4", timeout_s=5,
                                 attempts=1)
         took.append(time.monotonic() - started)
         endings[result.returncode] = endings.get(result.returncode, 0) + 1
@@ -285,6 +290,8 @@ def main():
     parser.add_argument("--discovery-server", default="fast-discovery-server")
     parser.add_argument("--netem", help='e.g. "delay 50ms loss 1%%" (routed cases, under --uml)')
     parser.add_argument("--starts", type=int, default=100, help="tcp-starts: how many")
+    parser.add_argument("--with-recorder", action="store_true",
+                        help="tcp-starts: a recorder on the bench meanwhile, valvectl from bench2")
     args = parser.parse_args()
     topology, run, attempts = CASES[args.case]
     if args.case == "discovery" and shutil.which(args.discovery_server) is None:
