@@ -14,6 +14,7 @@ Cases (docs/remote-benches.md):
                  also ROS_DISCOVERY_SERVER with the multicast profile (what Fast DDS 2.9.1 allows)
   tcp            routed, fastdds-wan-tcp-gateway.xml / fastdds-wan-tcp-bench.xml
   tcp-starts     the same, --starts lone valvectl lists one after another (a measurement)
+  tcp-first-starts  --starts times a gateway started and a valvectl list at once (a measurement)
 
 Run under tests/network/lab-run (with --uml for --netem). Exit 77 where no lab can be built.
 """
@@ -271,13 +272,31 @@ def case_tcp_starts(bench):
           f"the 4 valves: {endings}")
 
 
+def case_tcp_first_starts(bench):
+    """Not in CTest (a measurement): --starts times, a gateway started and one `valvectl list`
+    from the bench at once, each given 5 s: how many find no gateway when they meet the gateway
+    as it starts."""
+    tcp_bench = profile("fastdds-wan-tcp-bench.xml")
+    endings = {}
+    for n in range(bench.args.starts):
+        gateway = bench.start_gateway(profile("fastdds-wan-tcp-gateway.xml"))
+        result = bench.valvectl("bench", tcp_bench, "list", "--wait-for", "4", timeout_s=5,
+                                attempts=1)
+        bench.lab.stop(gateway)
+        endings[result.returncode] = endings.get(result.returncode, 0) + 1
+        if result.returncode != 0:
+            say(f"start {n + 1}: exit {result.returncode}: {result.stderr.strip()[-200:]}")
+    say(f"TCP FIRST STARTS {bench.args.starts}: exit statuses {endings}")
+
+
 # name: (topology, run, attempts a bench participant gets)
 CASES = {
     "plain": ("bridged", case_plain, 1),
     "plain-routed": ("routed", case_plain_routed, 1),
     "discovery": ("routed", case_discovery, 1),
     "tcp": ("routed", case_tcp, 3),
-    "tcp-starts": ("routed", case_tcp_starts, 1),
+    "tcp-starts": ("routed", case_tcp_starts, 3),
+    "tcp-first-starts": ("routed", case_tcp_first_starts, 1),
 }
 
 
