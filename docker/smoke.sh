@@ -34,16 +34,9 @@ case "${1:-}" in
 esac
 ((EUID == 0)) || die "run as root: podman, debootstrap and apt-get need it"
 
-results=()
-failed=0
-pass() { results+=("PASS  $*"); log "PASS: $*"; }
-fail() { results+=("FAIL  $*"); log "FAIL: $*"; failed=1; }
-summary() {
-  printf '\n== docker/smoke.sh summary ==\n'
-  printf '%s\n' "${results[@]}"
-  if ((failed)); then printf 'RESULT: FAIL\n'; else printf 'RESULT: PASS\n'; fi
-}
-trap summary EXIT
+# shellcheck source=tools/lib/results.sh
+source "$REPO_ROOT/tools/lib/results.sh"
+trap 'tj_summary "docker/smoke.sh summary"' EXIT
 
 # --- tools ---------------------------------------------------------------------------------------
 tj_podman_setup
@@ -63,18 +56,18 @@ log "building $IMAGE (the first build compiles everything: ~10-20 min on 2 cores
 start=$SECONDS
 if "${PODMAN[@]}" build --network host "${TJ_ULIMITS[@]}" --build-arg "BASE_IMAGE=$BASE_IMAGE" \
   -f "$REPO_ROOT/docker/Dockerfile" -t "$IMAGE" "$REPO_ROOT"; then
-  pass "podman build (OCI format) in $((SECONDS - start)) s"
+  tj_pass "podman build (OCI format) in $((SECONDS - start)) s"
 else
-  fail "podman build (OCI format) after $((SECONDS - start)) s"
+  tj_fail "podman build (OCI format) after $((SECONDS - start)) s"
   exit 1
 fi
 
 size=$("${PODMAN[@]}" image inspect --format '{{.Size}}' "$IMAGE")
 size_mb=$((size / 1000 / 1000))
 if ((size_mb < MAX_IMAGE_MB)); then
-  pass "image size ${size_mb} MB (< ${MAX_IMAGE_MB} MB)"
+  tj_pass "image size ${size_mb} MB (< ${MAX_IMAGE_MB} MB)"
 else
-  fail "image size ${size_mb} MB (limit ${MAX_IMAGE_MB} MB)"
+  tj_fail "image size ${size_mb} MB (limit ${MAX_IMAGE_MB} MB)"
 fi
 
 # --- checks, every one with --network none ------------------------------------------------------
@@ -85,9 +78,9 @@ check() {
   out=$("$@" 2>&1) || status=$?
   printf '%s\n' "$out" | sed 's/^/    | /' >&2
   if ((status == 0)) && grep -Eq -- "$want" <<<"$out"; then
-    pass "$name"
+    tj_pass "$name"
   else
-    fail "$name (exit $status, wanted output matching '$want')"
+    tj_fail "$name (exit $status, wanted output matching '$want')"
   fi
 }
 
@@ -151,4 +144,4 @@ check "fast-discovery-server on 11811, gateway and valvectl as clients (ROS_DISC
     wait "$server" || true
     echo "gateway exited $status"'
 
-((failed == 0))
+((TJ_FAILED == 0))

@@ -9,9 +9,12 @@
 #   tj_cross_image ARCH      makes localhost/teejet-cross-ARCH: the base, ARCH's cross compilers and
 #                            this project's build dependencies for ARCH (apt-get build-dep from
 #                            tools/package/debian/control); prints its name
-# TEEJET_CONTAINER_CACHE (default /var/cache/teejet-containers) keeps the debootstrap tarball.
+# TEEJET_CONTAINER_CACHE (default /var/cache/teejet-containers) keeps the debootstrap tarball and
+# TJ_CROSS_CCACHE, the compiler cache of every cross build (the packages' and check-arm64's
+# suites), whichever checkout they come from.
 
 TJ_CONTAINER_CACHE="${TEEJET_CONTAINER_CACHE:-/var/cache/teejet-containers}"
+TJ_CROSS_CCACHE="$TJ_CONTAINER_CACHE/ccache"
 TJ_BASE_IMAGE="localhost/teejet-bookworm-minbase:latest"
 TJ_SOURCE_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 
