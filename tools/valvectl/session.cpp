@@ -31,6 +31,10 @@ using std::chrono::milliseconds;
 constexpr milliseconds kTelemetryGrace{1000};
 // A reply sample is published right after the status that completes its request.
 constexpr milliseconds kReplyGrace{1000};
+// Over TCP, how long a participant may go without meeting a gateway before valvectl joins again
+// with a new one: twice the longest a start beside a starting gateway took to meet it (1.1 s of
+// 40, remote_bench_test.py tcp-first-starts).
+constexpr milliseconds kRejoinAfter{2000};
 // How often a waiting command looks at the valve's position to show progress.
 constexpr milliseconds kProgressPeriod{100};
 // How long a run without --command-readers waits for its commands' acknowledgements on exit.
@@ -82,20 +86,17 @@ std::string seconds_text(milliseconds duration) {
   return text.str();
 }
 
+// Thrown when joining again fails (said already): nothing of the session is left to use.
+struct JoinFailed {};
+
 class Session {
  public:
   // Joins the domain and subscribes; an Error says what DDS refused.
   static Result<std::unique_ptr<Session>> create(const Invocation& invocation,
                                                  const Terminal& terminal) {
-    auto participant = dds::Participant::create({.domain = invocation.global.domain,
-                                                 .profile_file = invocation.global.profile_file,
-                                                 .name = "valvectl",
-                                                 .minimum_lease = lease_for(invocation)});
-    if (!participant) return participant.error();
-    auto view = ValveView::create(**participant);
-    if (!view) return view.error();
-    return std::unique_ptr<Session>(
-        new Session(invocation, terminal, std::move(*participant), std::move(*view)));
+    std::unique_ptr<Session> session(new Session(invocation, terminal));
+    if (auto joined = session->join(); !joined) return joined.error();
+    return session;
   }
 
   int run() {
@@ -132,11 +133,81 @@ class Session {
 
   std::string domain_text() const { return "domain " + std::to_string(invocation_.global.domain); }
 
+  // Says how far discovery got, so that "nothing on the network" (or another profile or domain)
+  // and "a gateway that did not answer" read differently.
+  std::string no_gateway_text(const ValveTable& table) const {
+    std::string text = "no gateway found on " + domain_text() + " within " +
+                       seconds_text(invocation_.global.timeout) + ": discovery met ";
+    const std::size_t met = table.participants_met();
+    if (met == 0) return text + "no other participant (check the network, --profile and --domain)";
+    text += std::to_string(met) + (met == 1 ? " participant, " : " participants, ");
+    const std::size_t gateways = table.gateway_participants();
+    if (gateways == 0) return text + (met == 1 ? "not a gateway" : "none of them a gateway");
+    return text + std::to_string(gateways) + (gateways == 1 ? " gateway" : " gateways") +
+           " whose topics did not match";
+  }
+
+  // One participant and the view through it, made afresh by a rejoin.
+  Result<void> join() {
+    auto participant = dds::Participant::create({.domain = invocation_.global.domain,
+                                                 .profile_file = invocation_.global.profile_file,
+                                                 .name = "valvectl",
+                                                 .minimum_lease = lease_for(invocation_)});
+    if (!participant) return participant.error();
+    auto view = ValveView::create(**participant);
+    if (!view) return view.error();
+    participant_ = std::move(*participant);
+    view_ = std::move(*view);
+    joined_at_ = Clock::now();
+    return {};
+  }
+
+  // view_.wait_until, and the way round a defect of Fast DDS 2.9.1's TCP transport: a
+  // participant that starts while another one connects or leaves may never meet anyone (about
+  // one start in twenty beside a starting gateway: docs/remote-benches.md), while a new one does.
+  // Over TCP, a participant that has met no gateway kRejoinAfter after it joined is replaced by
+  // a new one, then again after twice as long, and so on; never once it has met a gateway or
+  // anything else (a command client) uses it. Over UDP discovery never stalled like that, and
+  // rejoining would only add to the load that slows discovery down.
+  bool wait_until(const ValveView::Condition& condition, Deadline until) {
+    for (;;) {
+      const bool may_rejoin = rejoin_after_ > milliseconds::zero() && participant_->uses_tcp();
+      const Deadline rejoin_at = may_rejoin ? joined_at_ + rejoin_after_ : Deadline::max();
+      if (view_->wait_until(condition, std::min(until, rejoin_at), terminal_.interrupted)) {
+        return true;
+      }
+      if (terminal_.interrupted || Clock::now() >= until) return false;
+      if (!participant_->participants_with_role(dds::kGatewayRole).empty()) {
+        rejoin_after_ = milliseconds::zero();
+        continue;
+      }
+      rejoin();
+    }
+  }
+
+  void rejoin() {
+    terminal_.err << "valvectl: met no gateway within " << seconds_text(rejoin_after_)
+                  << " over TCP; joining " << domain_text() << " again\n"
+                  << std::flush;
+    // The old participant goes first: a new one that met it leaving would be in the very
+    // situation that stalls it.
+    view_.reset();
+    participant_.reset();
+    if (auto joined = join(); !joined) {
+      // It joined once with the same settings: a refusal now ends the run, as one at the start.
+      complain("cannot join again: " + joined.error().reason);
+      throw JoinFailed{};
+    }
+    rejoin_after_ *= 2;
+  }
+
+  // Once something else holds the participant, it stays.
+  void keep_participant() { rejoin_after_ = milliseconds::zero(); }
+
   Deadline after_timeout() const { return Clock::now() + invocation_.global.timeout; }
 
   bool discover_directory(Deadline until) {
-    return view_.wait_until([](const ValveTable& table) { return table.directory_complete(); },
-                            until, terminal_.interrupted);
+    return wait_until([](const ValveTable& table) { return table.directory_complete(); }, until);
   }
 
   // ---- list and watch --------------------------------------------------------------------
@@ -144,22 +215,21 @@ class Session {
   int list() {
     const Deadline until = after_timeout();
     const unsigned wanted = invocation_.list.wait_for_online;
-    const bool complete = view_.wait_until(
+    const bool complete = wait_until(
         [&](const ValveTable& table) {
           return table.directory_complete() && table.online_count() >= wanted;
         },
-        until, terminal_.interrupted);
+        until);
     if (terminal_.interrupted) return kExitInterrupted;
     if (complete) {
       // Telemetry is durable too and follows presence closely; do not print a row of dashes
       // for a valve whose values are on their way.
-      view_.wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
-                       std::min(until, Deadline(Clock::now() + kTelemetryGrace)),
-                       terminal_.interrupted);
+      wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
+                 std::min(until, Deadline(Clock::now() + kTelemetryGrace)));
     }
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     if (table.empty()) {
-      complain("no gateway found on " + domain_text());
+      complain(no_gateway_text(table));
       return kExitNotFound;
     }
     print_table(table, /*with_gateways=*/false);
@@ -175,11 +245,11 @@ class Session {
   int layout() {
     discover_directory(after_timeout());
     if (terminal_.interrupted) return kExitInterrupted;
-    view_.wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
-                     Deadline(Clock::now() + kTelemetryGrace), terminal_.interrupted);
-    const ValveTable table = view_.snapshot();
+    wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
+               Deadline(Clock::now() + kTelemetryGrace));
+    const ValveTable table = view_->snapshot();
     if (table.empty()) {
-      complain("no gateway found on " + domain_text());
+      complain(no_gateway_text(table));
       return kExitNotFound;
     }
     if (table.locations().empty()) {
@@ -198,9 +268,9 @@ class Session {
   int neighbours() {
     discover_directory(after_timeout());
     if (terminal_.interrupted) return kExitInterrupted;
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     if (table.gateways().empty()) {
-      complain("no gateway found on " + domain_text());
+      complain(no_gateway_text(table));
       return kExitNotFound;
     }
     if (invocation_.global.json) {
@@ -219,6 +289,7 @@ class Session {
   template <class Request, class Unmatched>
   std::variant<std::unique_ptr<RequestClient<Request>>, int> connected_client(
       const std::set<std::string>& owners, std::size_t readers, Unmatched unmatched) {
+    keep_participant();
     auto made = RequestClient<Request>::create(*participant_, default_origin("valvectl"));
     if (!made) {
       complain(made.error().reason);
@@ -242,16 +313,16 @@ class Session {
   // there is none: no gateway has it, or two claim it (nothing is sent to either).
   std::variant<LocationRow, int> find_place(const std::string& name, Deadline until) {
     const auto named = [&](const ValveTable& table) { return table.locations_named(name); };
-    view_.wait_until(
+    wait_until(
         [&](const ValveTable& table) {
           return table.directory_complete() && !named(table).empty();
         },
-        until, terminal_.interrupted);
+        until);
     if (terminal_.interrupted) return kExitInterrupted;
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     const auto places = named(table);
     if (table.empty()) {
-      complain("no gateway found on " + domain_text());
+      complain(no_gateway_text(table));
       return kExitNotFound;
     }
     if (places.empty()) {
@@ -319,12 +390,12 @@ class Session {
       if (Clock::now() >= end) return kExitOk;
       // Keep the rhythm, but never try to catch up on frames a slow terminal made us miss.
       next = std::max(next + invocation_.watch.interval, Clock::now());
-      view_.wait_until(never, std::min(next, end), terminal_.interrupted);
+      wait_until(never, std::min(next, end));
     }
   }
 
   void draw_frame() {
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     if (!invocation_.global.json) {
       if (terminal_.out_is_tty) terminal_.out << "\x1b[H\x1b[2J";  // home, clear screen
       const std::time_t now = std::time(nullptr);
@@ -349,14 +420,14 @@ class Session {
     if (const int* exit_code = std::get_if<int>(&targets)) return *exit_code;
     const std::uint32_t serial = std::get<std::vector<std::uint32_t>>(targets).front();
     const std::string valve = codec::format_serial(serial);
-    view_.wait_until(
+    wait_until(
         [&](const ValveTable& table) {
           const auto row = table.row(serial);
           return row && row->position_degrees();
         },
-        after_timeout(), terminal_.interrupted);
+        after_timeout());
     if (terminal_.interrupted) return kExitInterrupted;
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     const auto row = table.row(serial);
     if (!row || !row->online || row->gateway_lost) {
       complain(valve + " is not online: nothing to identify");
@@ -437,9 +508,9 @@ class Session {
     if (request.every_online_valve) {
       discover_directory(until);
       if (terminal_.interrupted) return kExitInterrupted;
-      const ValveTable table = view_.snapshot();
+      const ValveTable table = view_->snapshot();
       if (table.empty()) {
-        complain("no gateway found on " + domain_text());
+        complain(no_gateway_text(table));
         return kExitNotFound;
       }
       const std::string& only = request.only_gateway;
@@ -480,11 +551,11 @@ class Session {
     }
     for (const std::uint32_t serial : serials) {
       // Done when the valve shows up, or early when every gateway has told all it knows.
-      view_.wait_until(
+      wait_until(
           [&](const ValveTable& table) { return table.row(serial) || table.directory_complete(); },
-          until, terminal_.interrupted);
+          until);
       if (terminal_.interrupted) return kExitInterrupted;
-      const ValveTable table = view_.snapshot();
+      const ValveTable table = view_->snapshot();
       if (table.row(serial)) continue;
       complain(not_found_text(table, serial) + located);
       return kExitNotFound;
@@ -495,10 +566,7 @@ class Session {
   // Why `serial` is not in `table`, saying how far discovery got: a valve is called unknown
   // only when every gateway there is to meet has told all it knows.
   std::string not_found_text(const ValveTable& table, std::uint32_t serial) const {
-    if (table.empty()) {
-      return "no gateway found on " + domain_text() + " within " +
-             seconds_text(invocation_.global.timeout);
-    }
+    if (table.empty()) return no_gateway_text(table);
     const auto met = table.gateways().size();
     const auto valves = std::to_string(table.rows().size()) + " valves";
     if (table.directory_complete()) {
@@ -519,7 +587,7 @@ class Session {
 
     // Every gateway that owns one of the valves must hear the command: its own reader, not
     // just as many readers as there are owners.
-    const ValveTable table = view_.snapshot();
+    const ValveTable table = view_->snapshot();
     std::set<std::string> owners;
     for (const std::uint32_t serial : serials) owners.insert(table.row(serial)->participant);
     owners.erase(std::string{});
@@ -631,7 +699,7 @@ class Session {
   }
 
   void show_position(std::uint32_t serial, std::optional<double>& shown) {
-    const auto row = view_.snapshot().row(serial);
+    const auto row = view_->snapshot().row(serial);
     const auto position = row ? row->position_degrees() : std::nullopt;
     if (!position || position == shown) return;
     shown = position;
@@ -646,24 +714,20 @@ class Session {
       const auto reply = table.reply(serial, *name);
       return reply && reply->received_ns >= accepted_ns;
     };
-    if (!view_.wait_until(fresh, Clock::now() + kReplyGrace, terminal_.interrupted)) return;
-    const Reply reply = *view_.snapshot().reply(serial, *name);
+    if (!wait_until(fresh, Clock::now() + kReplyGrace)) return;
+    const Reply reply = *view_->snapshot().reply(serial, *name);
     emit(reply_text(serial, reply), reply_json(serial, reply));
   }
 
-  Session(const Invocation& invocation, const Terminal& terminal,
-          std::unique_ptr<dds::Participant> participant, std::unique_ptr<ValveView> view)
-      : invocation_(invocation),
-        terminal_(terminal),
-        participant_(std::move(participant)),
-        view_owner_(std::move(view)),
-        view_(*view_owner_) {}
+  Session(const Invocation& invocation, const Terminal& terminal)
+      : invocation_(invocation), terminal_(terminal) {}
 
   const Invocation& invocation_;
   const Terminal& terminal_;
   std::unique_ptr<dds::Participant> participant_;
-  std::unique_ptr<ValveView> view_owner_;  // destroyed before the participant: its readers go first
-  ValveView& view_;
+  std::unique_ptr<ValveView> view_;  // destroyed before the participant: its readers go first
+  Deadline joined_at_;
+  milliseconds rejoin_after_ = kRejoinAfter;  // zero: the participant stays
 };
 
 }  // namespace
@@ -674,7 +738,11 @@ int run(const Invocation& invocation, const Terminal& terminal) {
     terminal.err << "valvectl: " << session.error().reason << '\n';
     return kExitFailure;
   }
-  return (*session)->run();
+  try {
+    return (*session)->run();
+  } catch (const JoinFailed&) {
+    return kExitFailure;
+  }
 }
 
 }  // namespace teejet::valvectl

@@ -177,7 +177,9 @@ void ValveView::update_gateways_matched() const {
   }
   const std::size_t announced = participant_.participants_with_role(dds::kGatewayRole).size();
   const bool settled = participant_.discovery_settled();
+  const std::size_t met = participant_.participants_met();
   std::lock_guard lock(mutex_);
+  table_.set_participants_met(met);
   table_.set_gateways_matched(static_cast<std::size_t>(matched.current_count));
   table_.set_gateway_participants(announced);
   table_.set_discovery_settled(settled);

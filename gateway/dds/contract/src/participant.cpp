@@ -1,5 +1,6 @@
 #include "teejet/dds/participant.hpp"
 
+#include <fastdds/rtps/transport/TCPTransportDescriptor.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <algorithm>
@@ -55,6 +56,11 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
   std::chrono::steady_clock::time_point last_discovered() const {
     std::lock_guard lock(mutex_);
     return last_discovered_;
+  }
+
+  std::size_t count() const {
+    std::lock_guard lock(mutex_);
+    return roles_.size();
   }
 
   std::set<std::string> with_role(std::string_view role) const {
@@ -279,6 +285,11 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   made->participant_ =
       factory->create_participant(static_cast<DomainId_t>(options.domain), qos,
                                   made->discovery_listener_.get(), StatusMask::none());
+  const auto& transports = qos.transport().user_transports;
+  made->uses_tcp_ = std::any_of(transports.begin(), transports.end(), [](const auto& transport) {
+    return std::dynamic_pointer_cast<eprosima::fastdds::rtps::TCPTransportDescriptor>(transport) !=
+           nullptr;
+  });
   const std::string security = security_plugins(qos);
   made->setup_ = profile_source(options.profile_file) + "; DDS-Security " +
                  (security.empty() ? "off" : "on (" + security + ")");
@@ -308,6 +319,8 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
 std::set<std::string> Participant::participants_with_role(std::string_view role) const {
   return discovery_listener_->with_role(role);
 }
+
+std::size_t Participant::participants_met() const { return discovery_listener_->count(); }
 
 bool Participant::discovery_settled() const {
   const auto& discovery = participant_->get_qos().wire_protocol().builtin.discovery_config;

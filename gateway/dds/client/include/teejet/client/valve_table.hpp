@@ -136,6 +136,12 @@ class ValveTable {
   // How many participants discovery has found that announce themselves as gateways
   // (dds::kGatewayRole), whether or not their topics have matched yet.
   void set_gateway_participants(std::size_t count) { gateway_participants_ = count; }
+  std::size_t gateway_participants() const { return gateway_participants_; }
+  // How many participants discovery has found alive, gateways or not: a client that met none
+  // has no way to any gateway (network, profile, domain), one that met a gateway's participant
+  // but matched none of its topics was not answered by it.
+  void set_participants_met(std::size_t count) { participants_met_ = count; }
+  std::size_t participants_met() const { return participants_met_; }
   // Whether discovery has gone quiet (dds::Participant::discovery_settled): until it has, a
   // gateway not met yet may still answer. A table filled by hand has nothing more to meet.
   void set_discovery_settled(bool settled) { discovery_settled_ = settled; }
@@ -180,6 +186,7 @@ class ValveTable {
   std::map<std::pair<std::string, std::string>, LocationRow> locations_;  // by (name, gateway)
   std::size_t gateways_matched_ = 0;
   std::size_t gateway_participants_ = 0;
+  std::size_t participants_met_ = 0;
   bool discovery_settled_ = true;
   std::set<std::string> lost_participants_;
 };

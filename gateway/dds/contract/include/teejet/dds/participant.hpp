@@ -102,11 +102,16 @@ class Participant {
   static Result<std::unique_ptr<Participant>> create(const ParticipantOptions& options);
   // The remote participants discovery found, alive and announcing `role`, as GUID prefixes.
   std::set<std::string> participants_with_role(std::string_view role) const;
+  // How many remote participants discovery has found alive, whatever their role.
+  std::size_t participants_met() const;
   // Whether discovery has gone quiet: no participant new to this one since it was made or for
   // two of its announcement periods (at most 1 s). A participant already running may answer a
   // newcomer only at its next periodic announcement (the loopback profile's 250 ms), so until
   // then the participants met so far need not be all there are.
   bool discovery_settled() const;
+  // Whether the profile gives it a TCP transport (Fast DDS 2.9.1's has defects of its own:
+  // docs/remote-benches.md).
+  bool uses_tcp() const { return uses_tcp_; }
   // How DDS is set up, for the logs: "profile FILE (from --profile)" or "Fast DDS's defaults
   // (no profile)", then "DDS-Security on (…)" or "DDS-Security off".
   const std::string& setup() const { return setup_; }
@@ -152,6 +157,7 @@ class Participant {
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::string setup_;
+  bool uses_tcp_ = false;
 };
 
 }  // namespace teejet::dds
