@@ -41,9 +41,6 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
       }
       std::lock_guard lock(mutex_);
       roles_[participant] = role;
-      if (info.status == Status::DISCOVERED_PARTICIPANT) {
-        last_discovered_ = std::chrono::steady_clock::now();
-      }
       return;
     }
     {
@@ -51,11 +48,6 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
       roles_.erase(participant);
     }
     if (info.status == Status::DROPPED_PARTICIPANT && on_dropped_) on_dropped_(participant);
-  }
-
-  std::chrono::steady_clock::time_point last_discovered() const {
-    std::lock_guard lock(mutex_);
-    return last_discovered_;
   }
 
   std::size_t count() const {
@@ -76,7 +68,6 @@ class Participant::DiscoveryListener final : public DomainParticipantListener {
   std::function<void(const std::string&)> on_dropped_;
   mutable std::mutex mutex_;
   std::map<std::string, std::string> roles_;  // every remote participant alive, by GUID prefix
-  std::chrono::steady_clock::time_point last_discovered_ = std::chrono::steady_clock::now();
 };
 
 namespace {
@@ -329,7 +320,7 @@ bool Participant::discovery_settled() const {
       std::chrono::seconds(period.seconds) + std::chrono::nanoseconds(period.nanosec);
   const auto quiet =
       std::min<std::chrono::steady_clock::duration>(2 * announcement, std::chrono::seconds(1));
-  return std::chrono::steady_clock::now() - discovery_listener_->last_discovered() >= quiet;
+  return std::chrono::steady_clock::now() - created_ >= quiet;
 }
 
 Participant::~Participant() {

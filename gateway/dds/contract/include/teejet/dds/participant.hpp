@@ -104,10 +104,12 @@ class Participant {
   std::set<std::string> participants_with_role(std::string_view role) const;
   // How many remote participants discovery has found alive, whatever their role.
   std::size_t participants_met() const;
-  // Whether discovery has gone quiet: no participant new to this one since it was made or for
-  // two of its announcement periods (at most 1 s). A participant already running may answer a
-  // newcomer only at its next periodic announcement (the loopback profile's 250 ms), so until
-  // then the participants met so far need not be all there are.
+  // Whether every participant already running has had the time to be met: two of this one's
+  // announcement periods (at most 1 s) since it was made. A participant already running may
+  // answer a newcomer only at its next periodic announcement (the loopback profile's 250 ms), so
+  // until then the participants met so far need not be all there are. Participants met later
+  // (started after this one, or whose announcements were lost) do not extend it; a gateway
+  // among them is counted by participants_with_role and waited for all the same.
   bool discovery_settled() const;
   // Whether the profile gives it a TCP transport (Fast DDS 2.9.1's has defects of its own:
   // docs/remote-benches.md).
@@ -158,6 +160,7 @@ class Participant {
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::string setup_;
   bool uses_tcp_ = false;
+  std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
 };
 
 }  // namespace teejet::dds
