@@ -243,6 +243,33 @@ TEST_F(RecordingFiles, StartAndEndPickAWindowOfTheRecording) {
   EXPECT_EQ(replayed->published, 4u);
 }
 
+TEST_F(RecordingFiles, AWindowOutsideTheRecordingIsRefusedWithTheSpan) {
+  // 12 messages 1 ms apart: 0 to 11 ms in. Before, --start past the end published nothing and
+  // exited 0 without a word.
+  const auto path = save("past.mcap", make_file({}));
+  auto options = fast();
+  options.start = std::chrono::milliseconds(100);
+  const auto past = replay_file(path, options);
+  ASSERT_FALSE(past.ok());
+  EXPECT_EQ(past.error().reason,
+            path +
+                ": nothing to replay from --start 0.100 s: the messages are from 0.000 s to "
+                "0.011 s into the recording");
+  options.start = std::chrono::milliseconds(20);
+  options.end = std::chrono::milliseconds(30);
+  const auto window = replay_file(path, options);
+  ASSERT_FALSE(window.ok());
+  EXPECT_EQ(window.error().reason,
+            path +
+                ": nothing to replay from --start 0.020 s to --end 0.030 s: the messages are "
+                "from 0.000 s to 0.011 s into the recording");
+  options.start = std::chrono::milliseconds(11);
+  options.end.reset();
+  const auto last = replay_file(path, options);
+  ASSERT_TRUE(last.ok()) << last.error().reason;
+  EXPECT_EQ(last->published, 1u);
+}
+
 TEST_F(RecordingFiles, TheRateScalesTheRecordedGaps) {
   // 11 ms of recording at rate 0.1 takes 110 ms, at rate 100 about 0.1 ms.
   const auto path = save("rate.mcap", make_file({}));

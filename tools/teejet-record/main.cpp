@@ -19,6 +19,8 @@
 
 namespace {
 
+// 30 days: longer runs end by Ctrl-C or the service manager, not by a deadline.
+constexpr double kMaxDurationSeconds = 30.0 * 86400.0;
 constexpr int kExitUsage = 2;
 
 constexpr const char* kFooter = R"(Examples:
@@ -159,7 +161,7 @@ int main(int argc, char** argv) {
                  "record only topics matching GLOB (repeatable; default every teejet topic)")
       ->type_name("GLOB");
   app.add_option("--duration", duration_seconds, "stop after this many seconds (default: Ctrl-C)")
-      ->check(CLI::PositiveNumber);
+      ->check(teejet::command_line::finite_range(0.001, kMaxDurationSeconds));
   app.add_option("--max-size", max_size_text,
                  "start a new file when one reaches SIZE (K, M, G); files get _000, _001, ...")
       ->type_name("SIZE");

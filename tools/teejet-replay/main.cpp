@@ -15,6 +15,10 @@
 namespace {
 
 constexpr int kExitUsage = 2;
+// A year into a recording: far beyond any recording, and well within the clocks' range.
+constexpr double kMaxOffsetSeconds = 365.0 * 86400.0;
+// As valvectl's waits: an hour.
+constexpr double kMaxWaitSeconds = 3600.0;
 
 constexpr const char* kFooter = R"(Examples:
   teejet-replay run.mcap                                 as recorded
@@ -48,20 +52,20 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--rate", options.rate, "speed factor: 2 is twice as fast")
       ->capture_default_str()
-      ->check(CLI::Range(0.001, 1000.0));
+      ->check(teejet::command_line::finite_range(0.001, 1000.0));
   app.add_flag("--loop", options.loop, "start again at the end, until Ctrl-C");
   app.add_option("--topic", options.topics, "replay only topics matching GLOB (repeatable)")
       ->type_name("GLOB");
   app.add_flag("--with-commands", options.with_commands,
                "also publish recorded commands (they move the valves of a gateway in the domain)");
   app.add_option("--start", start_s, "begin this many seconds into the recording")
-      ->check(CLI::NonNegativeNumber);
+      ->check(teejet::command_line::finite_range(0.0, kMaxOffsetSeconds));
   app.add_option("--end", end_s, "end this many seconds into the recording")
-      ->check(CLI::NonNegativeNumber);
+      ->check(teejet::command_line::finite_range(0.0, kMaxOffsetSeconds));
   app.add_option("--wait-for-readers", wait_s,
                  "seconds to wait, before the first message, for a reader on every topic")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(teejet::command_line::finite_range(0.0, kMaxWaitSeconds));
   app.add_option("--domain", options.domain, "DDS domain")
       ->capture_default_str()
       ->check(CLI::Range(0, teejet::dds::kMaxDomain));

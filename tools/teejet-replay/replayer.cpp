@@ -69,16 +69,50 @@ Status check_channel(const mcap::Channel& channel,
   return {};
 }
 
+std::string seconds_text(std::uint64_t nanoseconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f s", static_cast<double>(nanoseconds) / 1e9);
+  return text;
+}
+
+// Something to replay between --start and --end, or the reason why not (offsets count from the
+// file's first message, as --info shows them).
+Status check_window(const ReplayOptions& options, std::uint64_t first_time,
+                    std::uint64_t selected_first, std::uint64_t selected_last) {
+  if (selected_first > selected_last) {
+    return Error{ErrorCode::kInvalidValue, "the channels to replay hold no message"};
+  }
+  const auto start = static_cast<std::uint64_t>(options.start.count());
+  const auto end = options.end ? static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
+  const std::uint64_t from = selected_first - first_time;
+  const std::uint64_t to = selected_last - first_time;
+  if (start > to || end < from) {
+    return Error{ErrorCode::kInvalidValue,
+                 "nothing to replay from --start " + seconds_text(start) +
+                     (options.end ? " to --end " + seconds_text(end) : std::string()) +
+                     ": the messages" + (options.topics.empty() ? "" : " of the topics chosen") +
+                     " are from " + seconds_text(from) + " to " + seconds_text(to) +
+                     " into the recording"};
+  }
+  return {};
+}
+
 }  // namespace
 
 Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
   auto bytes = mcap::load_file(options.file);
   if (!bytes) return bytes.error();
-  // The first pass checks the file and finds its channels and first time.
+  // The first pass checks the file and finds its channels, its first time and when the
+  // selected topics have messages.
   std::uint64_t first_time = UINT64_MAX;
+  std::uint64_t selected_first = UINT64_MAX;
+  std::uint64_t selected_last = 0;
   auto contents =
-      mcap::read_messages(*bytes, [&](const mcap::Channel&, const mcap::Message& message) {
+      mcap::read_messages(*bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
         first_time = std::min(first_time, message.log_time);
+        if (!selected(options, dds_topic_of(channel))) return;
+        selected_first = std::min(selected_first, message.log_time);
+        selected_last = std::max(selected_last, message.log_time);
       });
   if (!contents) return Error{contents.error().code, options.file + ": " + contents.error().reason};
   if (!contents->incomplete.empty()) {
@@ -86,11 +120,21 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
     std::fprintf(stderr, "teejet-replay: %s: %s; replaying what is there\n", options.file.c_str(),
                  contents->incomplete.c_str());
   }
+  bool any_channel = false;
   for (const auto& [id, channel] : contents->channels) {
     if (!selected(options, dds_topic_of(channel))) continue;
     if (auto checked = check_channel(channel, contents->schemas); !checked) {
       return Error{checked.error().code, options.file + ": " + checked.error().reason};
     }
+    any_channel = true;
+  }
+  if (!any_channel) {
+    return Error{ErrorCode::kInvalidValue,
+                 options.file + ": no channel to replay" +
+                     (options.topics.empty() ? std::string() : " matches --topic")};
+  }
+  if (auto window = check_window(options, first_time, selected_first, selected_last); !window) {
+    return Error{window.error().code, options.file + ": " + window.error().reason};
   }
 
   auto participant = dds::Participant::create(
@@ -111,11 +155,6 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   }
 
   ReplayReport report;
-  if (routes.empty()) {
-    return Error{ErrorCode::kInvalidValue,
-                 options.file + ": no channel to replay" +
-                     (options.topics.empty() ? std::string() : " matches --topic")};
-  }
   const SteadyTime give_up = std::chrono::steady_clock::now() + options.wait_for_readers;
   while (!stop && std::chrono::steady_clock::now() < give_up &&
          !std::all_of(writers.begin(), writers.end(),

@@ -4,7 +4,10 @@
 // a bad command line exits with the program's documented usage status, never CLI11's own codes.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdlib>
 #include <optional>
+#include <sstream>
 #include <string>
 
 namespace teejet::command_line {
@@ -21,6 +24,25 @@ inline void refuse_empty_values(CLI::App& app) {
   for (CLI::App* subcommand : app.get_subcommands([](CLI::App*) { return true; })) {
     refuse_empty_values(*subcommand);
   }
+}
+
+// A number from `min` to `max`, both finite. CLI::Range lets "nan" through (every comparison
+// with NaN is false) and CLI::NonNegativeNumber "inf" and 1e300: a rate of NaN replayed a file at
+// once, a duration of 1e300 overflowed the deadline and ended a recording at its start.
+inline CLI::Validator finite_range(double min, double max) {
+  std::ostringstream range;
+  range << min << " to " << max;
+  return CLI::Validator(
+      [min, max, range = range.str()](std::string& value) -> std::string {
+        char* end = nullptr;
+        const double number = std::strtod(value.c_str(), &end);
+        if (value.empty() || end == nullptr || *end != '\0' || !std::isfinite(number) ||
+            number < min || number > max) {
+          return value + " is not a number from " + range;
+        }
+        return "";
+      },
+      "NUMBER " + range.str(), "FINITE_RANGE");
 }
 
 // Parses the command line. Nothing when the program goes on; otherwise the status to exit with:
