@@ -4,6 +4,7 @@
 #include <fastdds/rtps/common/SerializedPayload.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <atomic>
@@ -377,9 +378,30 @@ TEST_F(RecordingFiles, EmptyAndMissingFilesAreNamed) {
             "teejet-record: " + empty + ": not an MCAP file: shorter than its magic bytes\n");
   const auto missing = (dir_.path() / "missing.mcap").string();
   EXPECT_EQ(info(missing).status, 1);
-  EXPECT_EQ(info(missing).err, "teejet-record: " + missing + ": " + missing +
-                                   ": cannot open: No such file or directory\n");
-  ASSERT_FALSE(replay_file(missing).ok());
+  EXPECT_EQ(info(missing).err,
+            "teejet-record: " + missing + ": cannot open: No such file or directory\n");
+  const auto not_replayed = replay_file(missing);
+  ASSERT_FALSE(not_replayed.ok());
+  EXPECT_EQ(not_replayed.error().reason, missing + ": cannot open: No such file or directory");
+}
+
+TEST_F(RecordingFiles, WhatIsNotARegularFileIsRefusedAtOnce) {
+  // Before: a FIFO without a writer hung replay in open(), deaf to Ctrl-C, and /dev/zero grew
+  // until the OOM killer came.
+  const auto fifo = (dir_.path() / "fifo.mcap").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string refused =
+      ": it is a FIFO, not a recording file (a recording is read from a "
+      "regular file: copy it to one first)";
+  EXPECT_EQ(info(fifo).err, "teejet-record: " + fifo + refused + "\n");
+  const auto replayed = replay_file(fifo);
+  ASSERT_FALSE(replayed.ok());
+  EXPECT_EQ(replayed.error().reason, fifo + refused);
+  EXPECT_EQ(info("/dev/zero").err,
+            "teejet-record: /dev/zero: it is a character device, not a recording file (a "
+            "recording is read from a regular file: copy it to one first)\n");
+  EXPECT_EQ(info(dir_.path().string()).status, 1);
+  EXPECT_NE(info(dir_.path().string()).err.find("it is a directory"), std::string::npos);
 }
 
 TEST(RecordingTopics, GlobsSelectCatalogTopicsAndRefuseStrays) {

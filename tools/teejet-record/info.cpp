@@ -44,11 +44,11 @@ std::string schema_name(const std::map<std::uint16_t, mcap::Schema>& schemas, st
 }
 
 Result<FileInfo> inspect(const std::string& path) {
-  auto bytes = mcap::load_file(path);
-  if (!bytes) return bytes.error();
+  auto file = mcap::FileSource::open(path);
+  if (!file) return file.error();
   FileInfo info;
-  info.size = bytes->size();
-  auto summary = mcap::read_summary(*bytes);
+  info.size = (*file)->size();
+  auto summary = mcap::read_summary(**file);
   if (!summary) return summary.error();
   if (*summary) {
     const auto& statistics = (*summary)->statistics;
@@ -72,7 +72,7 @@ Result<FileInfo> inspect(const std::string& path) {
   std::map<std::uint16_t, std::uint64_t> counts;
   bool first = true;
   auto contents =
-      mcap::read_messages(*bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
+      mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
         if (*summary) return;
         ++counts[channel.id];
         info.start = first ? message.log_time : std::min(info.start, message.log_time);

@@ -100,15 +100,15 @@ Status check_window(const ReplayOptions& options, std::uint64_t first_time,
 }  // namespace
 
 Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
-  auto bytes = mcap::load_file(options.file);
-  if (!bytes) return bytes.error();
+  auto file = mcap::FileSource::open(options.file);
+  if (!file) return Error{file.error().code, options.file + ": " + file.error().reason};
   // The first pass checks the file and finds its channels, its first time and when the
   // selected topics have messages.
   std::uint64_t first_time = UINT64_MAX;
   std::uint64_t selected_first = UINT64_MAX;
   std::uint64_t selected_last = 0;
   auto contents =
-      mcap::read_messages(*bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
+      mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
         first_time = std::min(first_time, message.log_time);
         if (!selected(options, dds_topic_of(channel))) return;
         selected_first = std::min(selected_first, message.log_time);
@@ -168,7 +168,7 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   do {
     const SteadyTime wall_start = std::chrono::steady_clock::now();
     auto pass = mcap::read_messages(
-        *bytes, [&](const mcap::Channel& channel, const mcap::Message& message) {
+        **file, [&](const mcap::Channel& channel, const mcap::Message& message) {
           if (stop) return;
           const auto route = routes.find(channel.id);
           if (route == routes.end() || message.log_time < start_ns || message.log_time > end_ns) {

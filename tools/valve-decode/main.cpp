@@ -86,8 +86,8 @@ int decode_stream(std::istream& input, std::FILE* c_stream, bool flush_each_line
   return errno != 0 ? errno : EIO;
 }
 
-// The rest of an MCAP file whose magic has been read: in memory, since the reader works on the
-// whole file (its summary is at the end).
+// The rest of an MCAP stream whose magic has been read (a pipe, which can be read only once): in
+// memory.
 bool decode_mcap_rest(std::istream& input, const std::string& path) {
   std::vector<std::uint8_t> file(teejet::valve_decode::kMcapFirstLine.begin(),
                                  teejet::valve_decode::kMcapFirstLine.end());
@@ -124,7 +124,10 @@ bool decode_file(const std::string& path) {
   if (std::getline(input, first_line)) {
     // eof: the 7 bytes without the magic's newline are not an MCAP file.
     if (first_line == teejet::valve_decode::kMcapFirstLine && !input.eof()) {
-      return decode_mcap_rest(input, path);
+      // A regular file is read record by record; a pipe (valve-decode <(...)) only once, whole.
+      auto file = teejet::mcap::FileSource::open(path);
+      if (!file) return decode_mcap_rest(input, path);
+      return teejet::valve_decode::decode_mcap(**file, path, std::cout, std::cerr);
     }
     decode_line(first_line, /*flush=*/false);
     error = decode_stream(input, nullptr, /*flush_each_line=*/false);

@@ -28,7 +28,7 @@ std::set<std::uint16_t> frame_channels(const mcap::Contents& contents) {
 // Whether the frames come from more than one gateway: only then does each line need "gw", since
 // their interfaces (can0 on every gateway) no longer tell the buses apart. Decided for the whole
 // file, so that its lines all have the same members.
-bool several_gateways(std::span<const std::uint8_t> file, const std::set<std::uint16_t>& channels) {
+bool several_gateways(mcap::Source& file, const std::set<std::uint16_t>& channels) {
   std::set<std::string> gateways;
   const auto read =
       mcap::read_messages(file, [&](const mcap::Channel& channel, const mcap::Message& message) {
@@ -59,7 +59,7 @@ std::string message_line(const mcap::Channel& channel, const mcap::Message& mess
 
 }  // namespace
 
-bool decode_mcap(std::span<const std::uint8_t> file, const std::string& path, std::ostream& out,
+bool decode_mcap(mcap::Source& file, const std::string& path, std::ostream& out,
                  std::ostream& err) {
   const std::string prefix = "valve-decode: " + path + ": ";
   // A first pass checks the whole file and learns the schemas (the reader's visitor sees only a
@@ -95,6 +95,12 @@ bool decode_mcap(std::span<const std::uint8_t> file, const std::string& path, st
   }
   warn_if_incomplete();
   return true;
+}
+
+bool decode_mcap(std::span<const std::uint8_t> file, const std::string& path, std::ostream& out,
+                 std::ostream& err) {
+  mcap::MemorySource source(file);
+  return decode_mcap(source, path, out, err);
 }
 
 }  // namespace teejet::valve_decode

@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "teejet/mcap/reader.hpp"
+
 namespace teejet::valve_decode {
 
 // What std::getline reads first from an MCAP file: its 8-byte magic \x89MCAP0\r\n ends with the
@@ -22,6 +24,7 @@ inline constexpr std::string_view kMcapFirstLine{"\x89MCAP0\r", 7};
 // file. Returns false for a file that could not be decoded: damaged (the reader's reason; nothing
 // is printed), or without a frame channel. A file that ends early (a recorder that was killed)
 // is decoded up to there with a warning, and returns true.
+bool decode_mcap(mcap::Source& file, const std::string& path, std::ostream& out, std::ostream& err);
 bool decode_mcap(std::span<const std::uint8_t> file, const std::string& path, std::ostream& out,
                  std::ostream& err);
 

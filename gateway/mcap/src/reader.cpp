@@ -1,9 +1,13 @@
 #include "teejet/mcap/reader.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fstream>
+#include <new>
 
 #include "bytes.hpp"
 #include "compression.hpp"
@@ -42,35 +46,70 @@ class RecordWalker {
   RecordWalker(Contents& contents, const MessageVisitor& visit)
       : contents_(contents), visit_(visit) {}
 
-  // `base`: the offset of `bytes` in the file, for messages. In a chunk, records must be
-  // complete; in the file, a record cut short is where a killed recorder stopped.
-  Result<bool> walk(std::span<const std::uint8_t> bytes, std::uint64_t base, bool in_chunk,
-                    std::size_t& consumed) {
+  // A chunk's records, which must all be complete; `base` is the chunk's offset in the file.
+  Status walk_chunk(std::span<const std::uint8_t> bytes, std::uint64_t base) {
     ByteReader in(bytes);
     while (in.remaining() > 0) {
       const std::uint64_t at = base + in.position();
-      const std::size_t record_start = in.position();
       const auto opcode = in.u8();
       const auto length = in.u64();
-      if (!length) return cut_short(in_chunk, at, "a record header", consumed, record_start);
+      if (!length) return damaged(at, "a chunk's records end inside a record header");
       const auto content = in.take(*length);
       if (!content) {
-        return cut_short(in_chunk, at, "a " + opcode_name(*opcode) + " record", consumed,
-                         record_start);
+        return damaged(at, "a chunk's records end inside a " + opcode_name(*opcode) + " record");
       }
-      auto handled = handle(*opcode, *content, at, in_chunk);
+      auto handled = handle(*opcode, *content, at, true);
       if (!handled) return handled.error();
-      consumed = in.position();
+    }
+    return {};
+  }
+
+  // The file's data section from `start`, record by record: only the records read_messages
+  // handles are read (indexes and attachments are stepped over), so memory is bounded by the
+  // largest of those, not by the file. `end` is where the records read end.
+  Result<bool> walk(Source& file, std::uint64_t start, std::uint64_t& end) {
+    const std::uint64_t size = file.size();
+    end = start;
+    for (std::uint64_t at = start; at < size;) {
+      if (size - at < kRecordPrefixSize) return cut_short_file(at, "a record header");
+      auto prefix = file.read(at, kRecordPrefixSize);
+      if (!prefix) return prefix.error();
+      ByteReader in(*prefix);
+      const std::uint8_t opcode = *in.u8();
+      const std::uint64_t length = *in.u64();
+      if (length > size - at - kRecordPrefixSize) {
+        return cut_short_file(at, "a " + opcode_name(opcode) + " record");
+      }
+      Result<bool> handled = true;
+      if (read_by_walker(opcode)) {
+        auto content = file.read(at + kRecordPrefixSize, length);
+        if (!content) return content.error();
+        handled = handle(opcode, *content, at, false);
+      } else {
+        handled = handle(opcode, {}, at, false);
+      }
+      if (!handled) return handled.error();
+      at += kRecordPrefixSize + length;
+      end = at;
       if (!*handled) return false;  // Data End: the data section is over
     }
     return true;
   }
 
  private:
-  Result<bool> cut_short(bool in_chunk, std::uint64_t at, const std::string& what,
-                         std::size_t& consumed, std::size_t record_start) {
-    if (in_chunk) return damaged(at, "a chunk's records end inside " + what);
-    consumed = record_start;
+  static bool read_by_walker(std::uint8_t opcode) {
+    switch (static_cast<Opcode>(opcode)) {
+      case Opcode::kSchema:
+      case Opcode::kChannel:
+      case Opcode::kMessage:
+      case Opcode::kChunk:
+        return true;
+      default:
+        return false;
+    }
+  }
+
+  Result<bool> cut_short_file(std::uint64_t at, const std::string& what) {
     contents_.incomplete = "the file ends inside " + what + " at byte " + std::to_string(at) +
                            " (not closed: the recorder stopped early?)";
     return false;
@@ -141,9 +180,7 @@ class RecordWalker {
       return damaged(at, "a chunk's CRC does not match its records");
     }
     ++contents_.chunks;
-    std::size_t consumed = 0;
-    auto walked = walk(*data, 0, true, consumed);
-    if (!walked) return walked.error();
+    if (auto walked = walk_chunk(*data, at); !walked) return walked.error();
     return true;
   }
 
@@ -151,47 +188,62 @@ class RecordWalker {
   const MessageVisitor& visit_;
 };
 
-Error not_mcap(std::span<const std::uint8_t> file) {
-  return Error{ErrorCode::kInvalidValue, file.size() < kMagicSize
-                                             ? "not an MCAP file: shorter than its magic bytes"
-                                             : "not an MCAP file: wrong magic bytes"};
+// The file's first bytes are MCAP's magic, or the Error that says it is not an MCAP file.
+Status check_magic(Source& file) {
+  if (file.size() < kMagicSize) {
+    return Error{ErrorCode::kInvalidValue, "not an MCAP file: shorter than its magic bytes"};
+  }
+  auto magic = file.read(0, kMagicSize);
+  if (!magic) return magic.error();
+  if (!has_magic(*magic)) {
+    return Error{ErrorCode::kInvalidValue, "not an MCAP file: wrong magic bytes"};
+  }
+  return {};
+}
+
+bool ends_with_magic(Source& file) {
+  if (file.size() < kMagicSize) return false;
+  auto magic = file.read(file.size() - kMagicSize, kMagicSize);
+  return magic && has_magic(*magic);
 }
 
 // Where the Footer starts in a file that ends with one: right before the closing magic.
-std::size_t footer_offset(std::span<const std::uint8_t> file) {
+std::uint64_t footer_offset(const Source& file) {
   return file.size() - kMagicSize - Footer::kRecordSize;
 }
 
 // The Footer of a closed file; nullopt when the file is too short for one or lacks the closing
 // magic (a recorder that stopped early).
-Result<std::optional<Footer>> read_footer(std::span<const std::uint8_t> file) {
-  if (file.size() < 2 * kMagicSize + Footer::kRecordSize || !has_magic(file.last(kMagicSize))) {
+Result<std::optional<Footer>> read_footer(Source& file) {
+  if (file.size() < 2 * kMagicSize + Footer::kRecordSize || !ends_with_magic(file)) {
     return std::optional<Footer>{};
   }
-  const std::size_t at = footer_offset(file);
-  auto footer = parse_footer(file.subspan(at, Footer::kRecordSize));
+  const std::uint64_t at = footer_offset(file);
+  auto bytes = file.read(at, Footer::kRecordSize);
+  if (!bytes) return bytes.error();
+  auto footer = parse_footer(*bytes);
   if (!footer) return damaged(at, footer.error().reason);
   return std::optional<Footer>{*footer};
 }
 
 // The summary's records (not its Summary Offsets), once the footer points inside the file and
 // the summary's CRC matches.
-Result<std::span<const std::uint8_t>> summary_section(std::span<const std::uint8_t> file,
-                                                      const Footer& footer) {
-  const std::size_t footer_at = footer_offset(file);
+Result<Bytes> summary_section(Source& file, const Footer& footer) {
+  const std::uint64_t footer_at = footer_offset(file);
   const std::uint64_t start = footer.summary_start;
   const std::uint64_t offsets = footer.summary_offset_start;
   if (start > footer_at || (offsets != 0 && (offsets < start || offsets > footer_at))) {
     return damaged(footer_at, "the footer points outside the file");
   }
-  const auto covered = file.subspan(start, footer_at + Footer::kBytesBeforeCrc - start);
-  if (footer.summary_crc != 0 && crc32(covered) != footer.summary_crc) {
+  auto covered = file.read(start, footer_at + Footer::kBytesBeforeCrc - start);
+  if (!covered) return covered.error();
+  if (footer.summary_crc != 0 && crc32(*covered) != footer.summary_crc) {
     return damaged(start, "the summary's CRC does not match");
   }
-  const std::size_t end = offsets != 0 ? offsets : footer_at;
-  return file.subspan(start, end - start);
+  const std::uint64_t end = offsets != 0 ? offsets : footer_at;
+  covered->resize(static_cast<std::size_t>(end - start));
+  return covered;
 }
-
 // Adds one record of the summary section, found at byte `at`: schemas, channels, the statistics
 // and chunk indexes; attachment and metadata indexes and later record kinds are skipped.
 Status add_summary_record(Summary& summary, std::uint8_t opcode,
@@ -231,8 +283,8 @@ Status add_summary_record(Summary& summary, std::uint8_t opcode,
   }
 }
 
-// The records of `section`, which starts at byte `section_at` of `file`.
-Result<Summary> parse_summary(std::span<const std::uint8_t> file, std::uint64_t section_at,
+// The records of `section`, which starts at byte `section_at` of a file of `file_size` bytes.
+Result<Summary> parse_summary(std::uint64_t file_size, std::uint64_t section_at,
                               std::span<const std::uint8_t> section) {
   ByteReader in(section);
   Summary summary;
@@ -242,7 +294,7 @@ Result<Summary> parse_summary(std::span<const std::uint8_t> file, std::uint64_t 
     const auto length = in.u64();
     const auto content = length ? in.take(*length) : std::nullopt;
     if (!content) return damaged(at, "a summary record is cut short");
-    if (auto added = add_summary_record(summary, *opcode, *content, at, file.size()); !added) {
+    if (auto added = add_summary_record(summary, *opcode, *content, at, file_size); !added) {
       return added.error();
     }
   }
@@ -251,32 +303,114 @@ Result<Summary> parse_summary(std::span<const std::uint8_t> file, std::uint64_t 
 
 }  // namespace
 
-Result<Contents> read_messages(std::span<const std::uint8_t> file, const MessageVisitor& visit) {
-  if (!has_magic(file)) return not_mcap(file);
-  Contents contents;
-  ByteReader in(file.subspan(kMagicSize));
-  const auto opcode = in.u8();
-  const auto length = in.u64();
-  const auto header = length ? in.take(*length) : std::nullopt;
-  if (!opcode || *opcode != static_cast<std::uint8_t>(Opcode::kHeader)) {
-    if (!opcode) {
-      contents.incomplete = "the file ends after its magic bytes";
-      return contents;
+Result<Bytes> MemorySource::read(std::uint64_t offset, std::uint64_t length) {
+  if (offset > bytes_.size() || length > bytes_.size() - offset) {
+    return Error{ErrorCode::kInvalidValue, "a read beyond the end of the bytes"};
+  }
+  const auto part =
+      bytes_.subspan(static_cast<std::size_t>(offset), static_cast<std::size_t>(length));
+  return Bytes(part.begin(), part.end());
+}
+
+Result<std::unique_ptr<FileSource>> FileSource::open(const std::string& path) {
+  // O_NONBLOCK: opening a FIFO without a writer returns at once instead of hanging.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    const int error = errno;
+    return Error{ErrorCode::kSystem, std::string("cannot open: ") + std::strerror(error), error};
+  }
+  struct stat status {};
+  if (::fstat(fd, &status) != 0) {
+    const int error = errno;
+    ::close(fd);
+    return Error{ErrorCode::kSystem, std::string("cannot stat: ") + std::strerror(error), error};
+  }
+  if (!S_ISREG(status.st_mode)) {
+    ::close(fd);
+    const char* kind = S_ISFIFO(status.st_mode)   ? "a FIFO"
+                       : S_ISCHR(status.st_mode)  ? "a character device"
+                       : S_ISBLK(status.st_mode)  ? "a block device"
+                       : S_ISDIR(status.st_mode)  ? "a directory"
+                       : S_ISSOCK(status.st_mode) ? "a socket"
+                                                  : "a special file";
+    return Error{ErrorCode::kInvalidValue, std::string("it is ") + kind +
+                                               ", not a recording file (a recording is read from a "
+                                               "regular file: copy it to one first)"};
+  }
+  return std::unique_ptr<FileSource>(
+      new FileSource(fd, static_cast<std::uint64_t>(status.st_size)));
+}
+
+FileSource::~FileSource() { ::close(fd_); }
+
+Result<Bytes> FileSource::read(std::uint64_t offset, std::uint64_t length) {
+  if (offset > size_ || length > size_ - offset) {
+    return Error{ErrorCode::kInvalidValue, "a read beyond the end of the file"};
+  }
+  Bytes bytes;
+  try {
+    bytes.resize(static_cast<std::size_t>(length));
+  } catch (const std::bad_alloc&) {
+    return Error{ErrorCode::kSystem,
+                 "cannot hold a record of " + std::to_string(length) + " bytes at byte " +
+                     std::to_string(offset) + " in memory",
+                 ENOMEM};
+  }
+  for (std::size_t done = 0; done < bytes.size();) {
+    const ssize_t got =
+        ::pread(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) {
+      const int error = errno;
+      return Error{ErrorCode::kSystem, std::string("read failed: ") + std::strerror(error), error};
     }
+    if (got == 0) {
+      return Error{
+          ErrorCode::kSystem,
+          "the file became shorter while it was read (" + std::to_string(offset + done) + " bytes)",
+          EIO};
+    }
+    done += static_cast<std::size_t>(got);
+  }
+  return bytes;
+}
+
+Result<Contents> read_messages(Source& file, const MessageVisitor& visit) {
+  if (auto magic = check_magic(file); !magic) return magic.error();
+  Contents contents;
+  const std::uint64_t size = file.size();
+  if (size == kMagicSize) {
+    contents.incomplete = "the file ends after its magic bytes";
+    return contents;
+  }
+  auto opcode = file.read(kMagicSize, 1);
+  if (!opcode) return opcode.error();
+  if ((*opcode)[0] != static_cast<std::uint8_t>(Opcode::kHeader)) {
     return damaged(kMagicSize, "the first record is not a Header");
   }
-  if (!header) {
+  if (size - kMagicSize < kRecordPrefixSize) {
     contents.incomplete = "the file ends inside its Header";
     return contents;
   }
+  auto prefix = file.read(kMagicSize, kRecordPrefixSize);
+  if (!prefix) return prefix.error();
+  ByteReader in(*prefix);
+  in.u8();
+  const std::uint64_t length = *in.u64();
+  const std::uint64_t header_at = kMagicSize + kRecordPrefixSize;
+  if (length > size - header_at) {
+    contents.incomplete = "the file ends inside its Header";
+    return contents;
+  }
+  auto header = file.read(header_at, length);
+  if (!header) return header.error();
   auto parsed_header = parse_header(*header);
   if (!parsed_header) return damaged(kMagicSize, parsed_header.error().reason);
   contents.header = std::move(*parsed_header);
 
-  const std::size_t data_start = kMagicSize + in.position();
   RecordWalker walker(contents, visit);
-  std::size_t consumed = 0;
-  auto walked = walker.walk(file.subspan(data_start), data_start, false, consumed);
+  std::uint64_t data_end = 0;
+  auto walked = walker.walk(file, header_at + length, data_end);
   if (!walked) return walked.error();
   if (*walked && contents.incomplete.empty()) {
     contents.incomplete =
@@ -286,35 +420,32 @@ Result<Contents> read_messages(std::span<const std::uint8_t> file, const Message
   if (!contents.incomplete.empty()) return contents;
 
   // Data End found: the file must end with a footer and the magic.
-  const std::size_t data_end = data_start + consumed;
-  if (file.size() < data_end + Footer::kRecordSize + kMagicSize ||
-      !has_magic(file.last(kMagicSize))) {
+  if (size < data_end + Footer::kRecordSize + kMagicSize || !ends_with_magic(file)) {
     contents.incomplete = "the file ends after Data End without its footer";
   }
   return contents;
 }
 
-Result<std::optional<Summary>> read_summary(std::span<const std::uint8_t> file) {
-  if (!has_magic(file)) return not_mcap(file);
+Result<Contents> read_messages(std::span<const std::uint8_t> file, const MessageVisitor& visit) {
+  MemorySource source(file);
+  return read_messages(source, visit);
+}
+
+Result<std::optional<Summary>> read_summary(Source& file) {
+  if (auto magic = check_magic(file); !magic) return magic.error();
   auto footer = read_footer(file);
   if (!footer) return footer.error();
   if (!*footer || (*footer)->summary_start == 0) return std::optional<Summary>{};
   auto section = summary_section(file, **footer);
   if (!section) return section.error();
-  auto summary = parse_summary(file, (*footer)->summary_start, *section);
+  auto summary = parse_summary(file.size(), (*footer)->summary_start, *section);
   if (!summary) return summary.error();
   return std::optional<Summary>{std::move(*summary)};
 }
 
-Result<Bytes> load_file(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) {
-    const int error = errno;
-    return Error{ErrorCode::kSystem, path + ": cannot open: " + std::strerror(error), error};
-  }
-  Bytes bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  if (file.bad()) return Error{ErrorCode::kSystem, path + ": read failed", EIO};
-  return bytes;
+Result<std::optional<Summary>> read_summary(std::span<const std::uint8_t> file) {
+  MemorySource source(file);
+  return read_summary(source);
 }
 
 }  // namespace teejet::mcap
