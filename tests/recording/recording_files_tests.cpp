@@ -80,6 +80,32 @@ Bytes make_file(const FileSpec& spec) {
   return memory->bytes();
 }
 
+// Little-endian fields of a file, for making crafted ones out of a good one.
+std::uint64_t get_u64(const Bytes& file, std::size_t at) {
+  std::uint64_t value = 0;
+  for (int i = 7; i >= 0; --i) value = (value << 8) | file[at + static_cast<std::size_t>(i)];
+  return value;
+}
+void put_u64(Bytes& file, std::size_t at, std::uint64_t value) {
+  for (std::size_t i = 0; i < 8; ++i) file[at + i] = static_cast<std::uint8_t>(value >> (8 * i));
+}
+// A complete file's Footer: opcode, length, summary start, summary offset start, summary CRC.
+std::size_t footer_at(const Bytes& file) { return file.size() - 8 - 29; }
+// The first record of `opcode` in a complete file's summary section.
+std::size_t summary_record(const Bytes& file, std::uint8_t opcode) {
+  const std::size_t end = footer_at(file);
+  for (auto at = static_cast<std::size_t>(get_u64(file, end + 9)); at < end;
+       at += 9 + static_cast<std::size_t>(get_u64(file, at + 1))) {
+    if (file[at] == opcode) return at;
+  }
+  ADD_FAILURE() << "no record " << int{opcode} << " in the summary";
+  return 0;
+}
+// Summary CRC 0: not checked, so a crafted summary is read as it stands.
+void drop_summary_crc(Bytes& file) {
+  for (std::size_t i = 0; i < 4; ++i) file[footer_at(file) + 25 + i] = 0;
+}
+
 class RecordingFiles : public ::testing::Test {
  protected:
   std::string save(const std::string& name, const Bytes& bytes) {
@@ -118,6 +144,57 @@ class RecordingFiles : public ::testing::Test {
 
   testing::ScratchDir dir_;
 };
+
+TEST_F(RecordingFiles, ASummaryIsHeldAgainstTheMessagesAndNeverShownInTheirPlace) {
+  // Before, --info printed a crafted summary as it stood: 18446744073709551615 messages, an end
+  // before its start, a channel left out that holds messages replay would still publish.
+  Bytes lying = make_file({});
+  const std::size_t statistics = summary_record(lying, 0x0B) + 9;
+  put_u64(lying, statistics, UINT64_MAX);                   // message_count
+  put_u64(lying, statistics + 26, kStart + 5'000'000'000);  // message_start_time
+  put_u64(lying, statistics + 46 + 2, 0);                   // channel 0's count
+  drop_summary_crc(lying);
+  const auto path = save("lying.mcap", lying);
+  const auto described = info(path);
+  EXPECT_EQ(described.status, 0) << described.err;
+  EXPECT_THAT(described.out, HasSubstr("messages:    12\n"));
+  EXPECT_THAT(described.out, HasSubstr("duration:    0.011 s"));
+  EXPECT_THAT(described.out,
+              HasSubstr("summary:     disagrees with the file, not used: it counts "
+                        "18446744073709551615 messages, the file holds 12; it says the messages "
+                        "span 2026-09-21T14:13:25.000000000Z to 2026-09-21T14:13:20.011000000Z, "
+                        "they span 2026-09-21T14:13:20.000000000Z to "
+                        "2026-09-21T14:13:20.011000000Z; it counts 0 messages on channel 0 "
+                        "(teejet/valve/position), the file holds 12\n"));
+  const auto json = nlohmann::json::parse(info(path, true).out);
+  EXPECT_EQ(json["summary"], "disagrees");
+  EXPECT_EQ(json["messages"], 12);
+  EXPECT_EQ(json["summary_differences"].size(), 3u);
+
+  Bytes without_channel = make_file({});
+  without_channel[summary_record(without_channel, 0x04)] = 0x80;  // a record kind readers skip
+  drop_summary_crc(without_channel);
+  const auto missing = info(save("channel.mcap", without_channel));
+  EXPECT_THAT(missing.out, HasSubstr("summary:     disagrees with the file, not used: channel 0 "
+                                     "(teejet/valve/position) (12 messages) is missing from it\n"));
+  EXPECT_THAT(missing.out, HasSubstr("teejet/valve/position"));
+
+  EXPECT_THAT(info(save("good-summary.mcap", make_file({}))).out,
+              HasSubstr("complete:    yes\nsummary:     agrees with the messages read\n"));
+}
+
+TEST_F(RecordingFiles, AClosedFileWithoutASummaryIsCompleteAndSaysSo) {
+  // Before: "complete: yes (summary and chunk indexes: readers can seek)" for a file with none.
+  Bytes bare = make_file({});
+  put_u64(bare, footer_at(bare) + 9, 0);   // summary_start
+  put_u64(bare, footer_at(bare) + 17, 0);  // summary_offset_start
+  drop_summary_crc(bare);
+  const auto described = info(save("bare.mcap", bare));
+  EXPECT_EQ(described.status, 0) << described.err;
+  EXPECT_THAT(described.out, HasSubstr("complete:    yes\nsummary:     none (a reader must read "
+                                       "the whole file)\n"));
+  EXPECT_THAT(described.out, HasSubstr("messages:    12\n"));
+}
 
 TEST_F(RecordingFiles, AGoodFileIsDescribedAndReplayed) {
   const auto path = save("good.mcap", make_file({}));

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "teejet/mcap/reader.hpp"
@@ -16,7 +17,12 @@ struct ChannelInfo {
   std::uint64_t messages = 0;
 };
 
+// The summary held against the messages read.
+enum class Verdict { kNone, kAgrees, kDisagrees, kDamaged };
+
 struct FileInfo {
+  Verdict summary = Verdict::kNone;
+  std::vector<std::string> summary_differences;  // kDisagrees, kDamaged: why
   std::uint64_t size = 0;
   bool complete = true;
   std::string incomplete;
@@ -43,37 +49,68 @@ std::string schema_name(const std::map<std::uint16_t, mcap::Schema>& schemas, st
   return found == schemas.end() ? std::string() : found->second.name;
 }
 
+std::string channel_text(std::uint16_t id, const std::string& topic) {
+  return "channel " + std::to_string(id) + " (" + topic + ")";
+}
+
+// What the summary says that the messages read do not: empty when it agrees.
+std::vector<std::string> summary_differences(const mcap::Summary& summary, const FileInfo& read) {
+  std::vector<std::string> differences;
+  const auto& statistics = summary.statistics;
+  if (statistics.message_count != read.messages) {
+    differences.push_back("it counts " + std::to_string(statistics.message_count) +
+                          " messages, the file holds " + std::to_string(read.messages));
+  }
+  if (statistics.chunk_count != read.chunks || summary.chunk_indexes.size() != read.chunks) {
+    differences.push_back("it counts " + std::to_string(statistics.chunk_count) + " chunks and " +
+                          std::to_string(summary.chunk_indexes.size()) +
+                          " chunk indexes, the file holds " + std::to_string(read.chunks) +
+                          " chunks");
+  }
+  if (read.messages > 0 &&
+      (statistics.message_start_time != read.start || statistics.message_end_time != read.end)) {
+    differences.push_back("it says the messages span " + utc(statistics.message_start_time) +
+                          " to " + utc(statistics.message_end_time) + ", they span " +
+                          utc(read.start) + " to " + utc(read.end));
+  }
+  for (const auto& channel : read.channels) {
+    if (!summary.channels.contains(channel.id)) {
+      differences.push_back(channel_text(channel.id, channel.topic) + " (" +
+                            std::to_string(channel.messages) + " messages) is missing from it");
+      continue;
+    }
+    const auto count = statistics.channel_message_counts.find(channel.id);
+    const std::uint64_t counted =
+        count == statistics.channel_message_counts.end() ? 0 : count->second;
+    if (counted != channel.messages) {
+      differences.push_back("it counts " + std::to_string(counted) + " messages on " +
+                            channel_text(channel.id, channel.topic) + ", the file holds " +
+                            std::to_string(channel.messages));
+    }
+  }
+  for (const auto& [id, channel] : summary.channels) {
+    const bool in_file =
+        std::any_of(read.channels.begin(), read.channels.end(),
+                    [id = id](const ChannelInfo& listed) { return listed.id == id; });
+    if (!in_file) {
+      differences.push_back("it lists " + channel_text(id, channel.topic) +
+                            ", which the file does not have");
+    }
+  }
+  return differences;
+}
+
+// What the file holds, as read through from its first record; its summary, when it has one, is
+// held against that and never shown in its place (a crafted or damaged summary may say anything).
 Result<FileInfo> inspect(const std::string& path) {
   auto file = mcap::FileSource::open(path);
   if (!file) return file.error();
   FileInfo info;
   info.size = (*file)->size();
-  auto summary = mcap::read_summary(**file);
-  if (!summary) return summary.error();
-  if (*summary) {
-    const auto& statistics = (*summary)->statistics;
-    info.messages = statistics.message_count;
-    info.chunks = statistics.chunk_count;
-    info.start = statistics.message_start_time;
-    info.end = statistics.message_end_time;
-    for (const auto& index : (*summary)->chunk_indexes) {
-      info.compression = index.compression.empty() ? "none" : index.compression;
-      info.compressed += index.compressed_size;
-      info.uncompressed += index.uncompressed_size;
-    }
-    for (const auto& [id, channel] : (*summary)->channels) {
-      const auto count = statistics.channel_message_counts.find(id);
-      info.channels.push_back(
-          {id, channel.topic, schema_name((*summary)->schemas, channel.schema_id),
-           count == statistics.channel_message_counts.end() ? 0 : count->second});
-    }
-  }
-  // No summary (a killed recorder): read it through, which also says where it ends.
   std::map<std::uint16_t, std::uint64_t> counts;
   bool first = true;
   auto contents =
       mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
-        if (*summary) return;
         ++counts[channel.id];
         info.start = first ? message.log_time : std::min(info.start, message.log_time);
         info.end = std::max(info.end, message.log_time);
@@ -85,15 +122,64 @@ Result<FileInfo> inspect(const std::string& path) {
     info.complete = false;
     info.incomplete = contents->incomplete;
   }
-  if (!*summary) {
-    info.messages = contents->messages;
-    info.chunks = contents->chunks;
-    for (const auto& [id, channel] : contents->channels) {
-      info.channels.push_back(
-          {id, channel.topic, schema_name(contents->schemas, channel.schema_id), counts[id]});
+  info.messages = contents->messages;
+  info.chunks = contents->chunks;
+  for (const auto& [id, channel] : contents->channels) {
+    info.channels.push_back(
+        {id, channel.topic, schema_name(contents->schemas, channel.schema_id), counts[id]});
+  }
+  if (!info.complete) return info;  // its summary, if any, is not reached
+  auto summary = mcap::read_summary(**file);
+  if (!summary) {
+    info.summary = Verdict::kDamaged;
+    info.summary_differences = {summary.error().reason};
+    return info;
+  }
+  if (!*summary) return info;
+  info.summary_differences = summary_differences(**summary, info);
+  info.summary = info.summary_differences.empty() ? Verdict::kAgrees : Verdict::kDisagrees;
+  if (info.summary == Verdict::kAgrees) {
+    for (const auto& index : (*summary)->chunk_indexes) {
+      info.compression = index.compression.empty() ? "none" : index.compression;
+      info.compressed += index.compressed_size;
+      info.uncompressed += index.uncompressed_size;
     }
   }
   return info;
+}
+
+const char* verdict_name(Verdict verdict) {
+  switch (verdict) {
+    case Verdict::kNone:
+      return "none";
+    case Verdict::kAgrees:
+      return "agrees";
+    case Verdict::kDisagrees:
+      return "disagrees";
+    case Verdict::kDamaged:
+      return "damaged";
+  }
+  return "none";
+}
+
+std::string summary_text(const FileInfo& info) {
+  switch (info.summary) {
+    case Verdict::kNone:
+      return info.complete ? "none (a reader must read the whole file)"
+                           : "none (the file ends before it)";
+    case Verdict::kAgrees:
+      return "agrees with the messages read";
+    case Verdict::kDisagrees:
+    case Verdict::kDamaged: {
+      std::string text = info.summary == Verdict::kDamaged ? "damaged, not used: "
+                                                           : "disagrees with the file, not used: ";
+      for (std::size_t i = 0; i < info.summary_differences.size(); ++i) {
+        text += (i > 0 ? "; " : "") + info.summary_differences[i];
+      }
+      return text;
+    }
+  }
+  return "";
 }
 
 }  // namespace
@@ -123,8 +209,12 @@ int print_info(const std::string& path, bool json, std::ostream& out, std::ostre
                             {"start_ns", info->start},
                             {"end_ns", info->end},
                             {"duration_s", seconds},
-                            {"channels", channels}};
+                            {"channels", channels},
+                            {"summary", verdict_name(info->summary)}};
     if (!info->complete) document["incomplete"] = info->incomplete;
+    if (!info->summary_differences.empty()) {
+      document["summary_differences"] = info->summary_differences;
+    }
     if (!info->compression.empty()) {
       document["compression"] = info->compression;
       document["compressed_bytes"] = info->compressed;
@@ -134,9 +224,8 @@ int print_info(const std::string& path, bool json, std::ostream& out, std::ostre
   } else {
     out << fmt::format("file:        {} ({} bytes)\n", path, info->size);
     out << fmt::format("recorded by: {}\n", info->library.empty() ? "(unknown)" : info->library);
-    out << fmt::format("complete:    {}\n",
-                       info->complete ? "yes (summary and chunk indexes: readers can seek)"
-                                      : "no: " + info->incomplete);
+    out << fmt::format("complete:    {}\n", info->complete ? "yes" : "no: " + info->incomplete);
+    out << fmt::format("summary:     {}\n", summary_text(*info));
     if (info->messages > 0) {
       out << fmt::format("start:       {}\nend:         {}\n", utc(info->start), utc(info->end));
     }
