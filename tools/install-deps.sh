@@ -68,6 +68,8 @@ PACKAGES=(
   socat
   # docs/recording.md's plot of a recording (tools/plot-recording.py)
   python3-matplotlib
+  # a recorder whose wall clock steps (tests/recording/recording_e2e.py clock-step): libfaketime
+  faketime
   # isolated kernel for vcan tests without host privileges
   user-mode-linux
   kmod

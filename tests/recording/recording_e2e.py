@@ -65,16 +65,16 @@ class Run:
     def path(self, name):
         return os.path.join(self.work, name)
 
-    def start(self, name, argv, stdout=None):
+    def start(self, name, argv, stdout=None, env=None):
         err = open(self.path(name + ".err"), "w")
         out = open(self.path(stdout), "w") if stdout else subprocess.DEVNULL
-        proc = subprocess.Popen(argv, stdout=out, stderr=err)
+        proc = subprocess.Popen(argv, stdout=out, stderr=err, env=env)
         self.procs.append(proc)
         return proc
 
-    def run(self, argv, timeout=60, expect=0):
+    def run(self, argv, timeout=60, expect=0, env=None):
         try:
-            done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout)
+            done = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env)
         except subprocess.TimeoutExpired as expired:
             # What it printed before it was killed tells a hang at start from one midway.
             out = expired.stdout.decode(errors="replace") if expired.stdout else ""
@@ -109,9 +109,9 @@ class Run:
         wait_for_line(self.path(name + ".err"), "ready", 20, logger)
         return logger
 
-    def start_recorder(self, output, extra=()):
+    def start_recorder(self, output, extra=(), env=None):
         recorder = self.start("recorder", [self.binary("tools/teejet-record/teejet-record"),
-                                           "-o", self.path(output), *extra])
+                                           "-o", self.path(output), *extra], env=env)
         wait_for_line(self.path("recorder.err"), "recording to", 20, recorder)
         return recorder
 
@@ -592,11 +592,67 @@ def case_late(run):
           f"error and the status")
 
 
+# libfaketime (Debian package faketime), thread-safe build: Fast DDS runs threads.
+FAKETIME_LIB = "/usr/lib/x86_64-linux-gnu/faketime/libfaketimeMT.so.1"
+SKIP = 77
+
+
+class Skip(Exception):
+    pass
+
+
+def case_clock_step(run):
+    """A recorder whose wall clock steps back an hour mid-run (libfaketime reading its offset
+    from a file, the monotonic clock left alone, as an NTP or GPS correction would do): the file
+    spans the run, not an hour, and replay publishes all of it without waiting the hour. Before,
+    the log times followed the wall clock: a 14 s file read as 3,599.97 s and replay waited."""
+    if not os.path.exists(FAKETIME_LIB):
+        raise Skip(f"{FAKETIME_LIB} not found (Debian package faketime)")
+    offset = run.path("clock-offset")
+    with open(offset, "w") as f:
+        f.write("+0\n")
+    env = dict(os.environ, LD_PRELOAD=FAKETIME_LIB, FAKETIME_TIMESTAMP_FILE=offset,
+               FAKETIME_NO_CACHE="1", DONT_FAKE_MONOTONIC="1")
+    gateway = run.start_gateway()
+    run.valvectl("list", "--wait-for", "4", "--timeout", "20")
+    recorder = run.start_recorder("stepped.mcap", env=env)
+    readers = ["--command-readers", "2", "--timeout", "20"]
+    run.valvectl("move", "TJV000001", "--to", "60", "--speed", "100", "--wait", *readers)
+    with open(offset, "w") as f:
+        f.write("-3600\n")
+    # The control: a process under the same settings now reads a clock an hour behind.
+    probe = run.run(["python3", "-c", "import time; print(time.time())"], env=env)
+    lag = time.time() - float(probe.stdout)
+    check(3500 < lag < 3700, f"libfaketime did not step the clock (the probe is {lag:.1f} s off)")
+    run.valvectl("move", "TJV000001", "--to", "10", "--speed", "100", "--wait", *readers)
+    check(run.stop(recorder) == 0, "teejet-record did not exit 0 after SIGINT")
+    run.stop(gateway, signal.SIGTERM)
+    record = run.binary("tools/teejet-record/teejet-record")
+    info = json.loads(run.run([record, "--info", run.path("stepped.mcap"), "--json"]).stdout)
+    span_s = (info["end_ns"] - info["start_ns"]) / 1e9
+    check(info["complete"] and info["clock_steps"] == 0 and span_s < 600,
+          f"clock-step: the recording spans {span_s:.1f} s with {info['clock_steps']} clock "
+          f"step(s): {info}")
+    commands = next(c["messages"] for c in info["channels"] if c["topic"] ==
+                    "teejet/valve/command")
+    check(commands == 2, f"clock-step: {commands} commands recorded, not the 2 sent")
+    replayed = run.run([run.binary("tools/teejet-replay/teejet-replay"), run.path("stepped.mcap"),
+                        "--domain", "7", "--rate", "100", "--wait-for-readers", "0"], timeout=120)
+    published = int(re.search(r"(\d+) messages published", replayed.stderr).group(1))
+    check(published == info["messages"] - commands,
+          f"clock-step: replay published {published} of {info['messages'] - commands}: "
+          f"{replayed.stderr}")
+    print(f"clock-step: the recorder's clock stepped back 3600 s mid-run; the file spans "
+          f"{span_s:.1f} s ({info['messages']} messages, 0 steps in its log times) and replay "
+          f"published all {published} (commands held back)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--build-dir", required=True)
     parser.add_argument("--npm-reader", required=True)
-    parser.add_argument("case", choices=["record", "sigkill", "replay", "split", "late"])
+    parser.add_argument("case", choices=["record", "sigkill", "replay", "split", "late",
+                                         "clock-step"])
     args = parser.parse_args()
     if subprocess.run(["node", "--version"], capture_output=True).returncode != 0 or \
             not os.path.isdir(os.path.join(os.path.dirname(args.npm_reader), "node_modules")):
@@ -606,7 +662,11 @@ def main():
         run = Run(args, work)
         try:
             {"record": case_record, "sigkill": case_sigkill, "replay": case_replay,
-             "split": case_split, "late": case_late}[args.case](run)
+             "split": case_split, "late": case_late,
+             "clock-step": case_clock_step}[args.case](run)
+        except Skip as skipped:
+            print(f"SKIP: {skipped}")
+            return SKIP
         except (Failure, Timeout, subprocess.TimeoutExpired) as failure:
             print(f"FAIL: {failure}")
             for name in sorted(os.listdir(work)):

@@ -56,6 +56,10 @@ struct FileSpec {
   std::size_t chunk_size = 64;
   int messages = 12;
   Bytes payload_override;  // instead of a real sample
+  // The recorder's wall clock stepped by this before message `step_before` (counting from 0):
+  // its log times move, the publish times (the gateway's clock) do not.
+  int step_before = -1;
+  std::int64_t step_ns = 0;
 };
 
 Bytes make_file(const FileSpec& spec) {
@@ -73,8 +77,11 @@ Bytes make_file(const FileSpec& spec) {
     const Bytes payload = spec.payload_override.empty() ? position_payload(1, static_cast<float>(i))
                                                         : spec.payload_override;
     const std::uint64_t at = kStart + static_cast<std::uint64_t>(i) * 1'000'000;  // 1 ms apart
+    const std::uint64_t logged = spec.step_before >= 0 && i >= spec.step_before
+                                     ? at + static_cast<std::uint64_t>(spec.step_ns)
+                                     : at;
     EXPECT_TRUE(
-        (*writer)->write(*channel, static_cast<std::uint32_t>(i + 1), at, at, payload).ok());
+        (*writer)->write(*channel, static_cast<std::uint32_t>(i + 1), logged, at, payload).ok());
   }
   EXPECT_TRUE((*writer)->finish().ok());
   return memory->bytes();
@@ -346,6 +353,31 @@ TEST_F(RecordingFiles, AWindowOutsideTheRecordingIsRefusedWithTheSpan) {
   const auto last = replay_file(path, options);
   ASSERT_TRUE(last.ok()) << last.error().reason;
   EXPECT_EQ(last->published, 1u);
+}
+
+TEST_F(RecordingFiles, StepsOfTheRecordersClockAreReportedAndNeverWaitedOut) {
+  // Files recorded before log times were step-free: the clock set back an hour after 6 messages,
+  // or 10 years ahead. --info called the first 3,599.97 s long and replay waited the hour.
+  constexpr std::int64_t kHour = 3'600'000'000'000;
+  constexpr std::int64_t kTenYears = 10 * 365 * 86'400'000'000'000;
+  for (const std::int64_t step : {-kHour, kTenYears}) {
+    SCOPED_TRACE(step);
+    const auto path = save("step.mcap", make_file({.step_before = 6, .step_ns = step}));
+    const auto described = info(path);
+    EXPECT_EQ(described.status, 0) << described.err;
+    EXPECT_THAT(described.out, HasSubstr("duration:    0.010 s\n"));
+    EXPECT_THAT(described.out,
+                HasSubstr(step < 0 ? "clock steps: 1 in the recorder's log times (the largest by "
+                                     "-3599.999 s, before message 7)"
+                                   : "clock steps: 1 in the recorder's log times (the largest by "
+                                     "+315360000.001 s, before message 7)"));
+    EXPECT_EQ(nlohmann::json::parse(info(path, true).out)["clock_steps"], 1);
+    replay::ReplayOptions paced;  // as recorded: 10 ms of messages without the step
+    const auto replayed = replay_file(path, paced);
+    ASSERT_TRUE(replayed.ok()) << replayed.error().reason;
+    EXPECT_EQ(replayed->published, 12u);
+    EXPECT_EQ(replayed->clock_steps, 1u);
+  }
 }
 
 TEST_F(RecordingFiles, TheRateScalesTheRecordedGaps) {

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "teejet/mcap/reader.hpp"
+#include "teejet/recording/clock_steps.hpp"
 
 namespace teejet::record {
 namespace {
@@ -32,6 +33,10 @@ struct FileInfo {
   std::string compression;
   std::uint64_t compressed = 0, uncompressed = 0;
   std::uint64_t start = 0, end = 0;
+  std::uint64_t span = 0;  // from the first message to the last, without the clock's steps
+  std::uint64_t clock_steps = 0;
+  std::int64_t largest_step = 0;
+  std::uint64_t largest_step_at = 0;
   std::vector<ChannelInfo> channels;
 };
 
@@ -109,15 +114,20 @@ Result<FileInfo> inspect(const std::string& path) {
   info.size = (*file)->size();
   std::map<std::uint16_t, std::uint64_t> counts;
   bool first = true;
+  recording::ClockSteps steps;
   auto contents =
       mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
         ++counts[channel.id];
+        info.span = steps.next(message.log_time, message.publish_time);
         info.start = first ? message.log_time : std::min(info.start, message.log_time);
         info.end = std::max(info.end, message.log_time);
         first = false;
       });
   if (!contents) return contents.error();
   info.library = contents->header.library;
+  info.clock_steps = steps.steps();
+  info.largest_step = steps.largest_step_ns();
+  info.largest_step_at = steps.largest_step_at();
   if (!contents->incomplete.empty()) {
     info.complete = false;
     info.incomplete = contents->incomplete;
@@ -190,8 +200,7 @@ int print_info(const std::string& path, bool json, std::ostream& out, std::ostre
     err << "teejet-record: " << path << ": " << info.error().reason << '\n';
     return 1;
   }
-  const double seconds =
-      info->end > info->start ? static_cast<double>(info->end - info->start) / 1e9 : 0.0;
+  const double seconds = static_cast<double>(info->span) / 1e9;
   if (json) {
     nlohmann::json channels = nlohmann::json::array();
     for (const auto& channel : info->channels) {
@@ -210,7 +219,8 @@ int print_info(const std::string& path, bool json, std::ostream& out, std::ostre
                             {"end_ns", info->end},
                             {"duration_s", seconds},
                             {"channels", channels},
-                            {"summary", verdict_name(info->summary)}};
+                            {"summary", verdict_name(info->summary)},
+                            {"clock_steps", info->clock_steps}};
     if (!info->complete) document["incomplete"] = info->incomplete;
     if (!info->summary_differences.empty()) {
       document["summary_differences"] = info->summary_differences;
@@ -230,6 +240,12 @@ int print_info(const std::string& path, bool json, std::ostream& out, std::ostre
       out << fmt::format("start:       {}\nend:         {}\n", utc(info->start), utc(info->end));
     }
     out << fmt::format("duration:    {:.3f} s\nmessages:    {}\n", seconds, info->messages);
+    if (info->clock_steps > 0) {
+      out << fmt::format(
+          "clock steps: {} in the recorder's log times (the largest by {:+.3f} s, before message "
+          "{}): the duration and a replay leave them out\n",
+          info->clock_steps, static_cast<double>(info->largest_step) / 1e9, info->largest_step_at);
+    }
     if (info->compression.empty()) {
       out << fmt::format("chunks:      {}\n", info->chunks);
     } else {

@@ -31,6 +31,42 @@ constexpr Duration kReportPeriod = 1s;
 // they are written, and go out sorted.
 constexpr std::uint64_t kReorderWindowNs = 100'000'000;
 
+// Log times on a timeline that steps of the wall clock do not move: the wall clock when the
+// recording started, then the monotonic clock's progress. A recorder whose clock stepped back an
+// hour after 6 s wrote a 14 s file that read as 3,599.97 s long, and replay waited the hour.
+// Fast DDS stamps a sample's reception on the wall clock; the sample is placed on the timeline
+// by its age when taken (milliseconds), which a step between its reception and the take could
+// distort: beyond kLongestAge, or negative, the step is ignored.
+class LogTimeline {
+ public:
+  explicit LogTimeline(const Clock& clock)
+      : clock_(clock), wall_start_(unix_nanoseconds(clock.wall())), steady_start_(clock.steady()) {}
+
+  // The timeline now, and the wall clock now, read together.
+  struct Now {
+    std::uint64_t timeline;
+    std::uint64_t wall;
+  };
+  Now now() const {
+    const auto elapsed =
+        std::chrono::duration_cast<std::chrono::nanoseconds>(clock_.steady() - steady_start_);
+    return {wall_start_ + static_cast<std::uint64_t>(std::max<std::int64_t>(elapsed.count(), 0)),
+            unix_nanoseconds(clock_.wall())};
+  }
+
+  // Where a sample received at `received_wall` (0: unknown, taken now) goes on the timeline.
+  static std::uint64_t place(std::uint64_t received_wall, const Now& now) {
+    if (received_wall == 0 || received_wall >= now.wall) return now.timeline;
+    return now.timeline - std::min(now.wall - received_wall, kLongestAge);
+  }
+
+ private:
+  static constexpr std::uint64_t kLongestAge = 10'000'000'000;
+  const Clock& clock_;
+  const std::uint64_t wall_start_;
+  const SteadyTime steady_start_;
+};
+
 // Taken, not yet written: ordered by reception time (then by the order taken), with the index of
 // the sample's topic.
 using Pending = std::multimap<std::uint64_t, std::pair<std::size_t, TakenSample>>;
@@ -63,14 +99,14 @@ class TopicReaders {
     wait_set_.wait(active, dds::to_dds_duration(timeout));
   }
 
-  // Moves what every reader holds into `pending`; a sample that came without a reception time
-  // counts as received at `taken_at`.
-  void take_into(Pending& pending, std::uint64_t taken_at) {
+  // Moves what every reader holds into `pending`, each sample's reception time moved onto the
+  // recording's timeline (a sample without one counts as received now).
+  void take_into(Pending& pending, const LogTimeline::Now& now) {
     for (std::size_t i = 0; i < readers_.size(); ++i) {
       taken_.clear();
       readers_[i]->take(taken_);
       for (auto& sample : taken_) {
-        if (sample.received_ns == 0) sample.received_ns = taken_at;
+        sample.received_ns = LogTimeline::place(sample.received_ns, now);
         pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
       }
     }
@@ -189,8 +225,9 @@ class CandumpFile {
 
 class Recording {
  public:
-  Recording(const RecorderOptions& options, std::vector<const TopicType*> types)
-      : options_(options), types_(std::move(types)) {}
+  Recording(const RecorderOptions& options, std::vector<const TopicType*> types,
+            const LogTimeline& timeline)
+      : options_(options), types_(std::move(types)), timeline_(timeline) {}
 
   Status start() {
     if (!options_.candump_path.empty()) {
@@ -270,7 +307,7 @@ class Recording {
     if (auto finished = file_->finish(); !finished) return finished;
     closed_bytes_ += file_->bytes();
     if (auto opened = open_next(); !opened) return opened;
-    const std::uint64_t now = unix_nanoseconds(clock_->wall());
+    const std::uint64_t now = timeline_.now().timeline;
     messages_in_file_ = 0;
     for (const auto& [key, last] : last_samples_) {
       if (auto written =
@@ -294,7 +331,7 @@ class Recording {
 
   const RecorderOptions& options_;
   const std::vector<const TopicType*> types_;  // by topic index
-  const std::shared_ptr<const Clock> clock_ = system_clock();
+  const LogTimeline& timeline_;
   std::unique_ptr<RecordingFile> file_;
   std::unique_ptr<CandumpFile> candump_;
   int file_index_ = 0;
@@ -319,22 +356,23 @@ Status write_pending(Recording& recording, Pending& pending, std::uint64_t up_to
 // is the caller's.
 Status record_until_stopped(TopicReaders& readers, Recording& recording, Pending& pending,
                             const RecorderOptions& options, const std::atomic<bool>& stop,
-                            const std::function<void(const Progress&)>& report, SteadyTime start) {
-  const auto clock = system_clock();
+                            const std::function<void(const Progress&)>& report, SteadyTime start,
+                            const Clock& clock, const LogTimeline& timeline) {
   // Without --duration, the end is the stop flag alone.
   const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
   SteadyTime next_flush = start + options.flush_period;
   SteadyTime next_report = start + kReportPeriod;
   while (!stop.load()) {
-    SteadyTime now = clock->steady();
+    SteadyTime now = clock.steady();
     if (now >= end) break;
     readers.wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
-    const std::uint64_t taken_at = unix_nanoseconds(clock->wall());
+    const LogTimeline::Now taken_at = timeline.now();
     readers.take_into(pending, taken_at);
-    if (auto written = write_pending(recording, pending, taken_at - kReorderWindowNs); !written) {
+    if (auto written = write_pending(recording, pending, taken_at.timeline - kReorderWindowNs);
+        !written) {
       return written;
     }
-    now = clock->steady();
+    now = clock.steady();
     if (now >= next_flush) {
       if (auto flushed = recording.flush(); !flushed) return flushed;
       next_flush = now + options.flush_period;
@@ -393,20 +431,21 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
   auto readers = TopicReaders::open(**participant, *selected);
   if (!readers) return readers.error();
 
-  Recording recording(options, (*readers)->types());
+  const auto clock = system_clock();
+  const LogTimeline timeline(*clock);
+  Recording recording(options, (*readers)->types(), timeline);
   if (auto started = recording.start(); !started) {
     (void)recording.finish();  // the reason to report is the first one
     return started.error();
   }
   if (on_started) on_started();
 
-  const auto clock = system_clock();
   const SteadyTime start = clock->steady();
   Pending pending;
-  Status recorded =
-      record_until_stopped(**readers, recording, pending, options, stop, report, start);
+  Status recorded = record_until_stopped(**readers, recording, pending, options, stop, report,
+                                         start, *clock, timeline);
   // What the readers still hold, then everything taken.
-  (*readers)->take_into(pending, unix_nanoseconds(clock->wall()));
+  (*readers)->take_into(pending, timeline.now());
   if (recorded) recorded = write_pending(recording, pending, UINT64_MAX);
   // Readers first: nothing arrives while the file is closed.
   readers->reset();

@@ -9,6 +9,7 @@
 #include "teejet/dds/topics.hpp"
 #include "teejet/mcap/reader.hpp"
 #include "teejet/recording/catalog.hpp"
+#include "teejet/recording/clock_steps.hpp"
 
 namespace teejet::replay {
 namespace {
@@ -75,17 +76,14 @@ std::string seconds_text(std::uint64_t nanoseconds) {
   return text;
 }
 
-// Something to replay between --start and --end, or the reason why not (offsets count from the
-// file's first message, as --info shows them).
-Status check_window(const ReplayOptions& options, std::uint64_t first_time,
-                    std::uint64_t selected_first, std::uint64_t selected_last) {
-  if (selected_first > selected_last) {
+// Something to replay between --start and --end, or the reason why not. Offsets count from the
+// file's first message, without the steps of the recorder's clock.
+Status check_window(const ReplayOptions& options, std::uint64_t from, std::uint64_t to) {
+  if (from > to) {
     return Error{ErrorCode::kInvalidValue, "the channels to replay hold no message"};
   }
   const auto start = static_cast<std::uint64_t>(options.start.count());
   const auto end = options.end ? static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
-  const std::uint64_t from = selected_first - first_time;
-  const std::uint64_t to = selected_last - first_time;
   if (start > to || end < from) {
     return Error{ErrorCode::kInvalidValue,
                  "nothing to replay from --start " + seconds_text(start) +
@@ -102,17 +100,17 @@ Status check_window(const ReplayOptions& options, std::uint64_t first_time,
 Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
   auto file = mcap::FileSource::open(options.file);
   if (!file) return Error{file.error().code, options.file + ": " + file.error().reason};
-  // The first pass checks the file and finds its channels, its first time and when the
-  // selected topics have messages.
-  std::uint64_t first_time = UINT64_MAX;
+  // The first pass checks the file and finds its channels, the steps of the recorder's clock,
+  // and when the selected topics have messages.
+  recording::ClockSteps steps;
   std::uint64_t selected_first = UINT64_MAX;
   std::uint64_t selected_last = 0;
   auto contents =
       mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
-        first_time = std::min(first_time, message.log_time);
+        const std::uint64_t offset = steps.next(message.log_time, message.publish_time);
         if (!selected(options, dds_topic_of(channel))) return;
-        selected_first = std::min(selected_first, message.log_time);
-        selected_last = std::max(selected_last, message.log_time);
+        selected_first = std::min(selected_first, offset);
+        selected_last = std::max(selected_last, offset);
       });
   if (!contents) return Error{contents.error().code, options.file + ": " + contents.error().reason};
   if (!contents->incomplete.empty()) {
@@ -133,8 +131,16 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
                  options.file + ": no channel to replay" +
                      (options.topics.empty() ? std::string() : " matches --topic")};
   }
-  if (auto window = check_window(options, first_time, selected_first, selected_last); !window) {
+  if (auto window = check_window(options, selected_first, selected_last); !window) {
     return Error{window.error().code, options.file + ": " + window.error().reason};
+  }
+  if (steps.steps() > 0) {
+    std::fprintf(stderr,
+                 "teejet-replay: %s: the recorder's clock stepped %llu time(s) (the largest by "
+                 "%+.3f s, before message %llu): replayed without the steps\n",
+                 options.file.c_str(), static_cast<unsigned long long>(steps.steps()),
+                 static_cast<double>(steps.largest_step_ns()) / 1e9,
+                 static_cast<unsigned long long>(steps.largest_step_at()));
   }
 
   auto participant = dds::Participant::create(
@@ -162,20 +168,21 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
     std::this_thread::sleep_for(10ms);
   }
 
-  const std::uint64_t start_ns = first_time + static_cast<std::uint64_t>(options.start.count());
+  report.clock_steps = steps.steps();
+  const auto start_ns = static_cast<std::uint64_t>(options.start.count());
   const std::uint64_t end_ns =
-      options.end ? first_time + static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
+      options.end ? static_cast<std::uint64_t>(options.end->count()) : UINT64_MAX;
   do {
     const SteadyTime wall_start = std::chrono::steady_clock::now();
+    recording::ClockSteps pass_steps;  // the same offsets as the first pass's
     auto pass = mcap::read_messages(
         **file, [&](const mcap::Channel& channel, const mcap::Message& message) {
           if (stop) return;
+          const std::uint64_t at = pass_steps.next(message.log_time, message.publish_time);
           const auto route = routes.find(channel.id);
-          if (route == routes.end() || message.log_time < start_ns || message.log_time > end_ns) {
-            return;
-          }
+          if (route == routes.end() || at < start_ns || at > end_ns) return;
           const auto offset = std::chrono::duration<double, std::nano>(
-              static_cast<double>(message.log_time - start_ns) / options.rate);
+              static_cast<double>(at - start_ns) / options.rate);
           const SteadyTime due = wall_start + std::chrono::duration_cast<Duration>(offset);
           // Sleep in slices, so that a signal is noticed during a long gap.
           for (SteadyTime now = std::chrono::steady_clock::now(); now < due && !stop;

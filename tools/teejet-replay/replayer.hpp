@@ -39,6 +39,7 @@ struct ReplayReport {
   std::uint64_t worst_index = 0;  // which message that was (1 = the first published)
   std::uint64_t late_over_1ms = 0;
   int loops = 0;
+  std::uint64_t clock_steps = 0;  // steps of the recorder's clock in the file, replayed without
 };
 
 // Reads and checks the whole file first (channels, schemas): a damaged file or a channel of an
