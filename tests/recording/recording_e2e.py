@@ -495,6 +495,24 @@ def case_replay(run):
     print(f"replay: {len(messages)} samples over {span:.3f} s, each as recorded and in the "
           f"recorded order per instance; {summary}")
 
+    # Into the domain of a live gateway of the recording's: refused before anything is
+    # published (the dashboard would show its valves jumping between live and recorded), unless
+    # told to.
+    gateway = run.start_gateway()
+    run.valvectl("list", "--wait-for", "4", "--timeout", "20")
+    replay_bin = run.binary("tools/teejet-replay/teejet-replay")
+    refused = run.run([replay_bin, recording, "--wait-for-readers", "0"], expect=1)
+    check(re.search(r"gateway '[^']+' of the recording is live on domain 0: its state and the "
+                    r"recorded one would mix; nothing was published", refused.stderr) and
+          "messages published" not in refused.stderr,
+          f"replay into the live gateway's domain: {refused.stderr}")
+    forced = run.run([replay_bin, recording, "--wait-for-readers", "0", "--rate", "100",
+                      "--topic", "teejet/gateway/status", "--into-live-gateways"])
+    check("messages published" in forced.stderr, f"--into-live-gateways: {forced.stderr}")
+    check(run.stop(gateway, signal.SIGTERM) == 0, "the second gateway did not exit 0")
+    print("replay: refused where the recording's gateway was live; published with "
+          "--into-live-gateways")
+
 
 def case_split(run):
     """--max-size: every file is complete and stands alone, starting with the last sample of

@@ -28,7 +28,9 @@ constexpr const char* kFooter = R"(Examples:
 Messages go out in file order, spaced as they were received (log time) divided by --rate, each
 with its recorded source timestamp (the CAN receive time). Disposals are replayed as disposals.
 Recorded commands (teejet/valve/command) are not published unless --with-commands is given:
-a gateway in the domain would move its valves. Raw frames (teejet/can/frame) are published as
+a gateway in the domain would move its valves. Nothing is published where a gateway the
+recording holds is live (its state and the recorded one would mix) unless --into-live-gateways
+is given: replay into a domain of its own (--domain). Raw frames (teejet/can/frame) are published as
 DDS samples; to put frames back on a CAN bus, write them as candump -L text
 (teejet-record --candump) and use can-utils' canplayer.
 
@@ -58,6 +60,8 @@ int main(int argc, char** argv) {
       ->type_name("GLOB");
   app.add_flag("--with-commands", options.with_commands,
                "also publish recorded commands (they move the valves of a gateway in the domain)");
+  app.add_flag("--into-live-gateways", options.into_live_gateways,
+               "publish even where a gateway of the recording is live (their states mix)");
   app.add_option("--start", start_s, "begin this many seconds into the recording")
       ->check(teejet::command_line::finite_range(0.0, kMaxOffsetSeconds));
   app.add_option("--end", end_s, "end this many seconds into the recording")

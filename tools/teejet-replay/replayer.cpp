@@ -2,14 +2,18 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <memory>
+#include <set>
 #include <thread>
 
+#include "teejet/client/valve_view.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/mcap/reader.hpp"
 #include "teejet/recording/catalog.hpp"
 #include "teejet/recording/clock_steps.hpp"
+#include "teejet/valvePubSubTypes.h"
 
 namespace teejet::replay {
 namespace {
@@ -95,6 +99,39 @@ Status check_window(const ReplayOptions& options, std::uint64_t from, std::uint6
   return {};
 }
 
+// The gateway a recorded status sample is of; nullopt when the bytes are not one.
+std::optional<std::string> gateway_of(std::span<const std::uint8_t> data) {
+  GatewayStatusPubSubType type;
+  GatewayStatus status;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(data.size()));
+  std::memcpy(payload.data, data.data(), data.size());
+  payload.length = static_cast<std::uint32_t>(data.size());
+  if (!type.deserialize(&payload, &status)) return std::nullopt;
+  return status.gateway().to_string();
+}
+
+// How long replay looks for live gateways before it publishes: the client library's picture of
+// the domain is complete well within this when a gateway is there (docs/topics.md).
+constexpr auto kLiveGatewayLookup = std::chrono::seconds(5);
+
+// The names of the gateways alive on the domain, as a client sees them (the client library).
+Result<std::set<std::string>> live_gateways(dds::Participant& participant,
+                                            const std::atomic<bool>& stop) {
+  auto view = client::ValveView::create(participant);
+  if (!view) return view.error();
+  (*view)->wait_until(
+      [](const client::ValveTable& table) {
+        return table.gateway_participants() == 0 ? table.discovery_settled()
+                                                 : table.directory_complete();
+      },
+      std::chrono::steady_clock::now() + kLiveGatewayLookup, stop);
+  std::set<std::string> names;
+  for (const auto& gateway : (*view)->snapshot().gateways()) {
+    if (!gateway.lost) names.insert(gateway.name);
+  }
+  return names;
+}
+
 }  // namespace
 
 Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
@@ -105,10 +142,15 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   recording::ClockSteps steps;
   std::uint64_t selected_first = UINT64_MAX;
   std::uint64_t selected_last = 0;
+  std::set<std::string> recorded_gateways;
   auto contents =
       mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
         const std::uint64_t offset = steps.next(message.log_time, message.publish_time);
-        if (!selected(options, dds_topic_of(channel))) return;
+        const std::string topic = dds_topic_of(channel);
+        if (!selected(options, topic)) return;
+        if (topic == dds::topics::kGatewayStatus && !is_disposal(channel)) {
+          if (auto gateway = gateway_of(message.data)) recorded_gateways.insert(*gateway);
+        }
         selected_first = std::min(selected_first, offset);
         selected_last = std::max(selected_last, offset);
       });
@@ -146,6 +188,22 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   auto participant = dds::Participant::create(
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-replay"});
   if (!participant) return participant.error();
+  if (!recorded_gateways.empty() && !options.into_live_gateways) {
+    // Before any writer of ours exists, so that only the domain's own gateways are seen.
+    auto live = live_gateways(**participant, stop);
+    if (!live) return live.error();
+    std::string both;
+    for (const auto& name : recorded_gateways) {
+      if (live->contains(name)) both += (both.empty() ? "'" : ", '") + name + "'";
+    }
+    if (!both.empty()) {
+      return Error{ErrorCode::kInvalidValue,
+                   options.file + ": gateway " + both + " of the recording is live on domain " +
+                       std::to_string(options.domain) +
+                       ": its state and the recorded one would mix; nothing was published "
+                       "(replay into another --domain, or give --into-live-gateways)"};
+    }
+  }
   std::map<std::string, std::unique_ptr<recording::TopicWriter>> writers;
   std::map<std::uint16_t, Route> routes;
   for (const auto& [id, channel] : contents->channels) {

@@ -22,7 +22,10 @@ struct ReplayOptions {
   bool loop = false;
   std::vector<std::string> topics;  // globs on the DDS topic; empty: every teejet topic
   bool with_commands = false;       // teejet/valve/command moves real valves: only when asked
-  Duration start{};                 // offsets from the recording's first message
+  // Publish even where a live gateway has the name of one in the recording: its state and the
+  // recorded one would mix (a dashboard shows a valve jumping between them).
+  bool into_live_gateways = false;
+  Duration start{};  // offsets from the recording's first message
   std::optional<Duration> end;
   // Before the first message: wait until every replayed topic has a reader, at most this long.
   Duration wait_for_readers = std::chrono::seconds(1);

@@ -145,6 +145,7 @@ class ValveTable {
   // Whether discovery has gone quiet (dds::Participant::discovery_settled): until it has, a
   // gateway not met yet may still answer. A table filled by hand has nothing more to meet.
   void set_discovery_settled(bool settled) { discovery_settled_ = settled; }
+  bool discovery_settled() const { return discovery_settled_; }
 
   // How many gateways there are to meet: the most that discovery has matched, that announce
   // themselves as gateways, or that any gateway met says it hears on the domain (gateways_seen).
