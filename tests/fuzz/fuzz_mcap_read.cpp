@@ -7,13 +7,21 @@
 //
 // Properties: no crash, leak or sanitizer report whatever the bytes; an error always has a
 // reason; every message handed out is on a channel the file defined, and the count the reader
-// reports is the number it handed out; the summary reader likewise never crashes.
+// reports is the number it handed out; the summary reader likewise never crashes. The same bytes
+// then go through what teejet-record --info and teejet-replay do with a file before anything is
+// published (the summary held against the messages, clock steps, the recorded gateways' status
+// samples decoded, the --start window): --info exits 0 or 1, with output or a reason, and says
+// as many messages as the reader counted; replay's check agrees with the reader on the file.
 
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <sstream>
+#include <string>
 
 #include "fuzz_input.hpp"
+#include "info.hpp"
+#include "replayer.hpp"
 #include "teejet/mcap/reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -35,5 +43,29 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   auto summary = read_summary(file);
   if (!summary) FUZZ_CHECK(!summary.error().reason.empty(), "an error without a reason");
+
+  MemorySource source(file);
+  std::ostringstream out, err;
+  const int status = teejet::record::print_info(source, "fuzz.mcap", /*json=*/false, out, err);
+  FUZZ_CHECK(status == 0 || status == 1, "--info exited neither 0 nor 1");
+  FUZZ_CHECK(status == (contents ? 0 : 1), "--info and the reader disagree on the file");
+  if (status == 0) {
+    FUZZ_CHECK(
+        out.str().find("messages:    " + std::to_string(visited) + "\n") != std::string::npos,
+        "--info shows another message count than the reader's");
+  } else {
+    FUZZ_CHECK(!err.str().empty(), "--info failed without a reason");
+  }
+
+  teejet::replay::ReplayOptions options;
+  options.with_commands = true;
+  options.start = std::chrono::milliseconds(1);
+  auto checked = teejet::replay::check_recording(source, options);
+  if (checked) {
+    FUZZ_CHECK(contents.ok() && checked->contents.messages == contents->messages,
+               "replay's check read another file than the reader");
+  } else {
+    FUZZ_CHECK(!checked.error().reason.empty(), "replay's check failed without a reason");
+  }
   return 0;
 }

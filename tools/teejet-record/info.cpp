@@ -107,16 +107,14 @@ std::vector<std::string> summary_differences(const mcap::Summary& summary, const
 
 // What the file holds, as read through from its first record; its summary, when it has one, is
 // held against that and never shown in its place (a crafted or damaged summary may say anything).
-Result<FileInfo> inspect(const std::string& path) {
-  auto file = mcap::FileSource::open(path);
-  if (!file) return file.error();
+Result<FileInfo> inspect(mcap::Source& file) {
   FileInfo info;
-  info.size = (*file)->size();
+  info.size = file.size();
   std::map<std::uint16_t, std::uint64_t> counts;
   bool first = true;
   recording::ClockSteps steps;
   auto contents =
-      mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
+      mcap::read_messages(file, [&](const mcap::Channel& channel, const mcap::Message& message) {
         ++counts[channel.id];
         info.span = steps.next(message.log_time, message.publish_time);
         info.start = first ? message.log_time : std::min(info.start, message.log_time);
@@ -139,7 +137,7 @@ Result<FileInfo> inspect(const std::string& path) {
         {id, channel.topic, schema_name(contents->schemas, channel.schema_id), counts[id]});
   }
   if (!info.complete) return info;  // its summary, if any, is not reached
-  auto summary = mcap::read_summary(**file);
+  auto summary = mcap::read_summary(file);
   if (!summary) {
     info.summary = Verdict::kDamaged;
     info.summary_differences = {summary.error().reason};
@@ -195,7 +193,17 @@ std::string summary_text(const FileInfo& info) {
 }  // namespace
 
 int print_info(const std::string& path, bool json, std::ostream& out, std::ostream& err) {
-  auto info = inspect(path);
+  auto file = mcap::FileSource::open(path);
+  if (!file) {
+    err << "teejet-record: " << path << ": " << file.error().reason << '\n';
+    return 1;
+  }
+  return print_info(**file, path, json, out, err);
+}
+
+int print_info(mcap::Source& file, const std::string& path, bool json, std::ostream& out,
+               std::ostream& err) {
+  auto info = inspect(file);
   if (!info) {
     err << "teejet-record: " << path << ": " << info.error().reason << '\n';
     return 1;

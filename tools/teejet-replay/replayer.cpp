@@ -103,10 +103,7 @@ Status check_window(const ReplayOptions& options, std::uint64_t from, std::uint6
 std::optional<std::string> gateway_of(std::span<const std::uint8_t> data) {
   GatewayStatusPubSubType type;
   GatewayStatus status;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(data.size()));
-  std::memcpy(payload.data, data.data(), data.size());
-  payload.length = static_cast<std::uint32_t>(data.size());
-  if (!type.deserialize(&payload, &status)) return std::nullopt;
+  if (!recording::decode_payload(data, type, &status)) return std::nullopt;
   return status.gateway().to_string();
 }
 
@@ -134,47 +131,56 @@ Result<std::set<std::string>> live_gateways(dds::Participant& participant,
 
 }  // namespace
 
+Result<RecordingCheck> check_recording(mcap::Source& file, const ReplayOptions& options) {
+  RecordingCheck checked;
+  std::uint64_t selected_first = UINT64_MAX;
+  std::uint64_t selected_last = 0;
+  auto contents =
+      mcap::read_messages(file, [&](const mcap::Channel& channel, const mcap::Message& message) {
+        const std::uint64_t offset = checked.steps.next(message.log_time, message.publish_time);
+        const std::string topic = dds_topic_of(channel);
+        if (!selected(options, topic)) return;
+        if (topic == dds::topics::kGatewayStatus && !is_disposal(channel)) {
+          if (auto gateway = gateway_of(message.data)) checked.gateways.insert(*gateway);
+        }
+        selected_first = std::min(selected_first, offset);
+        selected_last = std::max(selected_last, offset);
+      });
+  if (!contents) return contents.error();
+  bool any_channel = false;
+  for (const auto& [id, channel] : contents->channels) {
+    if (!selected(options, dds_topic_of(channel))) continue;
+    if (auto channel_checked = check_channel(channel, contents->schemas); !channel_checked) {
+      return channel_checked.error();
+    }
+    any_channel = true;
+  }
+  if (!any_channel) {
+    return Error{
+        ErrorCode::kInvalidValue,
+        "no channel to replay" + (options.topics.empty() ? std::string() : " matches --topic")};
+  }
+  if (auto window = check_window(options, selected_first, selected_last); !window) {
+    return window.error();
+  }
+  checked.contents = std::move(*contents);
+  return checked;
+}
+
 Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool>& stop) {
   auto file = mcap::FileSource::open(options.file);
   if (!file) return Error{file.error().code, options.file + ": " + file.error().reason};
   // The first pass checks the file and finds its channels, the steps of the recorder's clock,
   // and when the selected topics have messages.
-  recording::ClockSteps steps;
-  std::uint64_t selected_first = UINT64_MAX;
-  std::uint64_t selected_last = 0;
-  std::set<std::string> recorded_gateways;
-  auto contents =
-      mcap::read_messages(**file, [&](const mcap::Channel& channel, const mcap::Message& message) {
-        const std::uint64_t offset = steps.next(message.log_time, message.publish_time);
-        const std::string topic = dds_topic_of(channel);
-        if (!selected(options, topic)) return;
-        if (topic == dds::topics::kGatewayStatus && !is_disposal(channel)) {
-          if (auto gateway = gateway_of(message.data)) recorded_gateways.insert(*gateway);
-        }
-        selected_first = std::min(selected_first, offset);
-        selected_last = std::max(selected_last, offset);
-      });
-  if (!contents) return Error{contents.error().code, options.file + ": " + contents.error().reason};
-  if (!contents->incomplete.empty()) {
+  auto checked = check_recording(**file, options);
+  if (!checked) return Error{checked.error().code, options.file + ": " + checked.error().reason};
+  const mcap::Contents& contents = checked->contents;
+  const recording::ClockSteps& steps = checked->steps;
+  const std::set<std::string>& recorded_gateways = checked->gateways;
+  if (!contents.incomplete.empty()) {
     // Still replayable: a killed recorder's file up to its last complete chunk.
     std::fprintf(stderr, "teejet-replay: %s: %s; replaying what is there\n", options.file.c_str(),
-                 contents->incomplete.c_str());
-  }
-  bool any_channel = false;
-  for (const auto& [id, channel] : contents->channels) {
-    if (!selected(options, dds_topic_of(channel))) continue;
-    if (auto checked = check_channel(channel, contents->schemas); !checked) {
-      return Error{checked.error().code, options.file + ": " + checked.error().reason};
-    }
-    any_channel = true;
-  }
-  if (!any_channel) {
-    return Error{ErrorCode::kInvalidValue,
-                 options.file + ": no channel to replay" +
-                     (options.topics.empty() ? std::string() : " matches --topic")};
-  }
-  if (auto window = check_window(options, selected_first, selected_last); !window) {
-    return Error{window.error().code, options.file + ": " + window.error().reason};
+                 contents.incomplete.c_str());
   }
   if (steps.steps() > 0) {
     std::fprintf(stderr,
@@ -206,7 +212,7 @@ Result<ReplayReport> replay(const ReplayOptions& options, const std::atomic<bool
   }
   std::map<std::string, std::unique_ptr<recording::TopicWriter>> writers;
   std::map<std::uint16_t, Route> routes;
-  for (const auto& [id, channel] : contents->channels) {
+  for (const auto& [id, channel] : contents.channels) {
     const std::string topic = dds_topic_of(channel);
     if (!selected(options, topic)) continue;
     auto& writer = writers[topic];

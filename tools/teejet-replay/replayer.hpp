@@ -8,11 +8,14 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "teejet/core/result.hpp"
 #include "teejet/core/time.hpp"
+#include "teejet/mcap/reader.hpp"
+#include "teejet/recording/clock_steps.hpp"
 
 namespace teejet::replay {
 
@@ -44,6 +47,17 @@ struct ReplayReport {
   int loops = 0;
   std::uint64_t clock_steps = 0;  // steps of the recorder's clock in the file, replayed without
 };
+
+// What replay learns from a recording before it publishes: the file read through and checked
+// (channels of teejet topics with the schemas it knows), its clock steps and the gateways whose
+// status it holds. An Error says why the file cannot be replayed with these options (without
+// its name); it opens no DDS entity.
+struct RecordingCheck {
+  mcap::Contents contents;
+  recording::ClockSteps steps;
+  std::set<std::string> gateways;
+};
+Result<RecordingCheck> check_recording(mcap::Source& file, const ReplayOptions& options);
 
 // Reads and checks the whole file first (channels, schemas): a damaged file or a channel of an
 // unknown type is an Error before anything is published. Stops early when `stop` is set.

@@ -161,20 +161,7 @@ class TypedWriter final : public TopicWriter {
 
  private:
   Status parse(std::span<const std::uint8_t> bytes, Sample& sample) {
-    SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
-    if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());
-    payload.length = static_cast<std::uint32_t>(bytes.size());
-    const Error refused{ErrorCode::kInvalidValue, "a " + std::to_string(bytes.size()) +
-                                                      "-byte payload is not a CDR " +
-                                                      std::string(type_.getName())};
-    // fastcdr throws on a payload that ends early, which the type support turns into false, and
-    // on an unknown encapsulation or a boolean that is not 0 or 1, which it lets through.
-    try {
-      if (bytes.size() < 4 || !type_.deserialize(&payload, &sample)) return refused;
-    } catch (const std::exception&) {
-      return refused;
-    }
-    return {};
+    return decode_payload(bytes, type_, &sample);
   }
 
   template <class Write>
@@ -253,6 +240,25 @@ const TopicType* find_topic(std::string_view topic) {
 
 bool topic_matches(std::string_view glob, std::string_view topic) {
   return ::fnmatch(std::string(glob).c_str(), std::string(topic).c_str(), 0) == 0;
+}
+
+Status decode_payload(std::span<const std::uint8_t> bytes,
+                      eprosima::fastdds::dds::TopicDataType& type, void* sample) {
+  SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
+  if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());
+  payload.length = static_cast<std::uint32_t>(bytes.size());
+  const Error refused{ErrorCode::kInvalidValue, "a " + std::to_string(bytes.size()) +
+                                                    "-byte payload is not a CDR " +
+                                                    std::string(type.getName())};
+  // fastcdr throws on a payload that ends early, which the type support turns into false, and
+  // on an unknown encapsulation, a boolean that is not 0 or 1 or a string longer than its bound,
+  // which it lets through.
+  try {
+    if (bytes.size() < 4 || !type.deserialize(&payload, sample)) return refused;
+  } catch (const std::exception&) {
+    return refused;
+  }
+  return {};
 }
 
 }  // namespace teejet::recording

@@ -30,6 +30,11 @@ inline constexpr const char* kDdsTopicKey = "dds_topic";
 inline constexpr const char* kInstanceStateKey = "instance_state";
 inline constexpr const char* kDisposed = "disposed";
 
+// A recorded payload (CDR, encapsulation included) deserialized by `type` into `sample`, which
+// must be of that type; an Error when the bytes are not one of its samples.
+Status decode_payload(std::span<const std::uint8_t> bytes,
+                      eprosima::fastdds::dds::TopicDataType& type, void* sample);
+
 // The text of idl/teejet/valve.idl, built into the program: every schema's data.
 std::string_view valve_idl();
 
