@@ -8,10 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,6 +16,7 @@
 #include "support/dds_peer.hpp"
 #include "support/scratch_dir.hpp"
 #include "support/subprocess.hpp"
+#include "support/tcp_profiles.hpp"
 #include "support/test_domain.hpp"
 #include "support/text.hpp"
 
@@ -30,22 +28,9 @@ using namespace teejet::valvectl;
 
 constexpr const char* kRejoined = "over TCP; joining domain ";
 
-std::string read_file(const std::string& path) {
-  std::ifstream file(path);
-  std::stringstream text;
-  text << file.rdbuf();
-  return text.str();
-}
-
 class ValvectlOverTcp : public ::testing::Test {
  protected:
-  void SetUp() override {
-    // The bench names the vehicle's address: here the gateway is on this host.
-    std::string bench = read_file(CONFIG_DIR "/fastdds-wan-tcp-bench.xml");
-    ASSERT_NE(bench.find("192.0.2.2"), std::string::npos);
-    std::ofstream(bench_profile_) << std::regex_replace(bench, std::regex("192\\.0\\.2\\.2"),
-                                                        "127.0.0.1");
-  }
+  void SetUp() override { write_local_tcp_bench_profile(CONFIG_DIR, bench_profile_); }
 
   std::vector<std::string> valvectl(std::vector<std::string> args) const {
     args.insert(args.begin(), {VALVECTL_PATH, "--domain", domain_, "--profile", bench_profile_});

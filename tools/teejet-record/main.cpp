@@ -226,9 +226,16 @@ int main(int argc, char** argv) {
   const bool show_progress = !quiet && (progress_flag || ::isatty(STDERR_FILENO) == 1);
   ProgressLine line;
   bool shown = false;
+  std::uint64_t rejoins_said = 0;
   auto recorded = teejet::record::record(
       options, stop_requested,
       [&](const teejet::record::Progress& progress) {
+        if (progress.rejoins > rejoins_said && !quiet) {
+          std::cerr << (shown ? "\n" : "") << "teejet-record: met no gateway over TCP; joined DDS "
+                    << "domain " << options.domain << " again (" << progress.rejoins
+                    << " time(s))\n";
+          rejoins_said = progress.rejoins;
+        }
         if (!show_progress) return;
         line.show(progress);
         shown = true;

@@ -131,6 +131,31 @@ struct LastSample {
 using LastSamples = std::map<std::pair<std::size_t, recording::InstanceHandle>, LastSample>;
 
 // One MCAP file of the recording with a channel per subscribed topic.
+// The recorder's participant and its readers; made afresh when it joins again.
+struct Joined {
+  std::unique_ptr<dds::Participant> participant;
+  std::unique_ptr<TopicReaders> readers;  // declared after: destroyed first
+  SteadyTime at;
+};
+
+Result<Joined> join(const RecorderOptions& options, const std::vector<std::string>& topics,
+                    SteadyTime now) {
+  auto participant = dds::Participant::create(
+      {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
+  if (!participant) return participant.error();
+  auto readers = TopicReaders::open(**participant, topics);
+  if (!readers) return readers.error();
+  return Joined{std::move(*participant), std::move(*readers), now};
+}
+
+// Over TCP, how long a participant may go without meeting a gateway before the recorder joins
+// again with a new one (then twice as long, and so on): Fast DDS 2.9.1's TCP transport leaves
+// about one participant in twenty that starts beside another's start or departure without
+// meeting anyone, for good (docs/remote-benches.md), as valvectl does.
+constexpr Duration kRejoinAfter = 2s;
+// A recorder may wait long for its gateway: the interval stops doubling here.
+constexpr Duration kLongestRejoinInterval = 64s;
+
 class RecordingFile {
  public:
   // Channels (and their schemas) are added with their first message: a topic nobody publishes
@@ -294,6 +319,8 @@ class Recording {
     return finished;
   }
 
+  void joined_again() { ++progress_.rejoins; }
+
   const Progress& progress(Duration elapsed) {
     progress_.elapsed = elapsed;
     progress_.file_bytes = closed_bytes_ + (file_ ? file_->bytes() : 0);
@@ -354,10 +381,12 @@ Status write_pending(Recording& recording, Pending& pending, std::uint64_t up_to
 // Takes, writes, flushes every flush_period and reports every kReportPeriod until `stop` is set,
 // the duration has passed or a write fails, whose reason it returns. What is still pending then
 // is the caller's.
-Status record_until_stopped(TopicReaders& readers, Recording& recording, Pending& pending,
-                            const RecorderOptions& options, const std::atomic<bool>& stop,
+Status record_until_stopped(Joined& joined, const std::vector<std::string>& topics,
+                            Recording& recording, Pending& pending, const RecorderOptions& options,
+                            const std::atomic<bool>& stop,
                             const std::function<void(const Progress&)>& report, SteadyTime start,
                             const Clock& clock, const LogTimeline& timeline) {
+  Duration rejoin_after = kRejoinAfter;  // zero: the participant stays
   // Without --duration, the end is the stop flag alone.
   const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
   SteadyTime next_flush = start + options.flush_period;
@@ -365,14 +394,31 @@ Status record_until_stopped(TopicReaders& readers, Recording& recording, Pending
   while (!stop.load()) {
     SteadyTime now = clock.steady();
     if (now >= end) break;
-    readers.wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
+    joined.readers->wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
     const LogTimeline::Now taken_at = timeline.now();
-    readers.take_into(pending, taken_at);
+    joined.readers->take_into(pending, taken_at);
     if (auto written = write_pending(recording, pending, taken_at.timeline - kReorderWindowNs);
         !written) {
       return written;
     }
     now = clock.steady();
+    if (rejoin_after > Duration::zero() && now - joined.at >= rejoin_after) {
+      if (!joined.participant->uses_tcp() ||
+          !joined.participant->participants_with_role(dds::kGatewayRole).empty()) {
+        rejoin_after = Duration::zero();
+      } else {
+        // The old participant goes first: a new one that met it leaving would be in the very
+        // situation that stalls it. What its readers held is pending already.
+        joined.readers.reset();
+        joined.participant.reset();
+        auto again = join(options, topics, now);
+        if (!again) return again.error();
+        joined = std::move(*again);
+        recording.joined_again();
+        rejoin_after = std::min<Duration>(2 * rejoin_after, kLongestRejoinInterval);
+        if (report) report(recording.progress(now - start));
+      }
+    }
     if (now >= next_flush) {
       if (auto flushed = recording.flush(); !flushed) return flushed;
       next_flush = now + options.flush_period;
@@ -425,15 +471,12 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
                         const std::function<void()>& on_started) {
   auto selected = select_topics(options.topics);
   if (!selected) return selected.error();
-  auto participant = dds::Participant::create(
-      {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
-  if (!participant) return participant.error();
-  auto readers = TopicReaders::open(**participant, *selected);
-  if (!readers) return readers.error();
-
   const auto clock = system_clock();
+  auto joined = join(options, *selected, clock->steady());
+  if (!joined) return joined.error();
+
   const LogTimeline timeline(*clock);
-  Recording recording(options, (*readers)->types(), timeline);
+  Recording recording(options, joined->readers->types(), timeline);
   if (auto started = recording.start(); !started) {
     (void)recording.finish();  // the reason to report is the first one
     return started.error();
@@ -442,14 +485,14 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
 
   const SteadyTime start = clock->steady();
   Pending pending;
-  Status recorded = record_until_stopped(**readers, recording, pending, options, stop, report,
-                                         start, *clock, timeline);
+  Status recorded = record_until_stopped(*joined, *selected, recording, pending, options, stop,
+                                         report, start, *clock, timeline);
   // What the readers still hold, then everything taken.
-  (*readers)->take_into(pending, timeline.now());
+  if (joined->readers) joined->readers->take_into(pending, timeline.now());
   if (recorded) recorded = write_pending(recording, pending, UINT64_MAX);
   // Readers first: nothing arrives while the file is closed.
-  readers->reset();
-  participant->reset();
+  joined->readers.reset();
+  joined->participant.reset();
   const Status finished = recording.finish();
   const Progress& progress = recording.progress(clock->steady() - start);
   if (report) report(progress);

@@ -44,6 +44,8 @@ struct Progress {
   std::map<std::string, TopicTally> topics;       // by channel topic (incl. "/disposed" ones)
   std::uint64_t unknown_disposals = 0;            // of instances never seen alive: not recordable
   std::uint64_t frames_without_candump_line = 0;  // in the MCAP file, not in --candump
+  // Times the recorder joined the domain again over TCP, having met no gateway (docs/recording.md)
+  std::uint64_t rejoins = 0;
 };
 
 // The topics `globs` select, in catalog order; an Error names a glob that selects none.
