@@ -11,6 +11,7 @@
 
 #include "teejet/bus_frame/bus_frame.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/tcp_rejoin.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/mcap/writer.hpp"
 #include "teejet/recording/catalog.hpp"
@@ -135,25 +136,19 @@ using LastSamples = std::map<std::pair<std::size_t, recording::InstanceHandle>, 
 struct Joined {
   std::unique_ptr<dds::Participant> participant;
   std::unique_ptr<TopicReaders> readers;  // declared after: destroyed first
-  SteadyTime at;
 };
 
-Result<Joined> join(const RecorderOptions& options, const std::vector<std::string>& topics,
-                    SteadyTime now) {
+Result<Joined> join(const RecorderOptions& options, const std::vector<std::string>& topics) {
   auto participant = dds::Participant::create(
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
   if (!participant) return participant.error();
   auto readers = TopicReaders::open(**participant, topics);
   if (!readers) return readers.error();
-  return Joined{std::move(*participant), std::move(*readers), now};
+  return Joined{std::move(*participant), std::move(*readers)};
 }
 
-// Over TCP, how long a participant may go without meeting a gateway before the recorder joins
-// again with a new one (then twice as long, and so on): Fast DDS 2.9.1's TCP transport leaves
-// about one participant in twenty that starts beside another's start or departure without
-// meeting anyone, for good (docs/remote-benches.md), as valvectl does.
-constexpr Duration kRejoinAfter = 2s;
-// A recorder may wait long for its gateway: the interval stops doubling here.
+// A recorder may wait long for its gateway: over TCP it joins again (dds::TcpRejoin) at most
+// this far apart.
 constexpr Duration kLongestRejoinInterval = 64s;
 
 class RecordingFile {
@@ -386,7 +381,8 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
                             const std::atomic<bool>& stop,
                             const std::function<void(const Progress&)>& report, SteadyTime start,
                             const Clock& clock, const LogTimeline& timeline) {
-  Duration rejoin_after = kRejoinAfter;  // zero: the participant stays
+  dds::TcpRejoin rejoin(dds::TcpRejoin::kFirst, kLongestRejoinInterval);
+  rejoin.joined(clock.steady());
   // Without --duration, the end is the stop flag alone.
   const SteadyTime end = options.duration ? start + *options.duration : SteadyTime::max();
   SteadyTime next_flush = start + options.flush_period;
@@ -402,22 +398,17 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
       return written;
     }
     now = clock.steady();
-    if (rejoin_after > Duration::zero() && now - joined.at >= rejoin_after) {
-      if (!joined.participant->uses_tcp() ||
-          !joined.participant->participants_with_role(dds::kGatewayRole).empty()) {
-        rejoin_after = Duration::zero();
-      } else {
-        // The old participant goes first: a new one that met it leaving would be in the very
-        // situation that stalls it. What its readers held is pending already.
-        joined.readers.reset();
-        joined.participant.reset();
-        auto again = join(options, topics, now);
-        if (!again) return again.error();
-        joined = std::move(*again);
-        recording.joined_again();
-        rejoin_after = std::min<Duration>(2 * rejoin_after, kLongestRejoinInterval);
-        if (report) report(recording.progress(now - start));
-      }
+    if (rejoin.replace(*joined.participant, now)) {
+      // The old participant goes first: a new one that met it leaving would be in the very
+      // situation that stalls it. What its readers held is pending already.
+      joined.readers.reset();
+      joined.participant.reset();
+      auto again = join(options, topics);
+      if (!again) return again.error();
+      joined = std::move(*again);
+      rejoin.joined(now);
+      recording.joined_again();
+      if (report) report(recording.progress(now - start));
     }
     if (now >= next_flush) {
       if (auto flushed = recording.flush(); !flushed) return flushed;
@@ -472,7 +463,7 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
   auto selected = select_topics(options.topics);
   if (!selected) return selected.error();
   const auto clock = system_clock();
-  auto joined = join(options, *selected, clock->steady());
+  auto joined = join(options, *selected);
   if (!joined) return joined.error();
 
   const LogTimeline timeline(*clock);

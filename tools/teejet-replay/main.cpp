@@ -30,12 +30,13 @@ with its recorded source timestamp (the CAN receive time). Disposals are replaye
 Recorded commands (teejet/valve/command) are not published unless --with-commands is given:
 a gateway in the domain would move its valves. Nothing is published where a gateway the
 recording holds is live (its state and the recorded one would mix) unless --into-live-gateways
-is given: replay into a domain of its own (--domain). Raw frames (teejet/can/frame) are published as
-DDS samples; to put frames back on a CAN bus, write them as candump -L text
+is given: replay into a domain of its own (--domain). Raw frames (teejet/can/frame) are
+published as DDS samples; to put frames back on a CAN bus, write them as candump -L text
 (teejet-record --candump) and use can-utils' canplayer.
 
 Exit status: 0 when done or after SIGINT/SIGTERM; 1 for a file that cannot be read, a channel of
-a type this program does not know, or DDS failing; 2 for a bad command line.)";
+a type this program does not know, a window with nothing in it, a live gateway of the recording,
+or DDS failing; 2 for a bad command line.)";
 
 std::atomic<bool> stop_requested{false};
 

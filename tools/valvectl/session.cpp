@@ -17,6 +17,7 @@
 #include "teejet/client/valve_view.hpp"
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/conversions.hpp"
+#include "teejet/dds/tcp_rejoin.hpp"
 
 namespace teejet::valvectl {
 
@@ -31,10 +32,6 @@ using std::chrono::milliseconds;
 constexpr milliseconds kTelemetryGrace{1000};
 // A reply sample is published right after the status that completes its request.
 constexpr milliseconds kReplyGrace{1000};
-// Over TCP, how long a participant may go without meeting a gateway before valvectl joins again
-// with a new one: twice the longest a start beside a starting gateway took to meet it (1.1 s of
-// 40, remote_bench_test.py tcp-first-starts).
-constexpr milliseconds kRejoinAfter{2000};
 // How often a waiting command looks at the valve's position to show progress.
 constexpr milliseconds kProgressPeriod{100};
 // How long a run without --command-readers waits for its commands' acknowledgements on exit.
@@ -158,35 +155,24 @@ class Session {
     if (!view) return view.error();
     participant_ = std::move(*participant);
     view_ = std::move(*view);
-    joined_at_ = Clock::now();
+    rejoin_.joined(Clock::now());
     return {};
   }
 
-  // view_.wait_until, and the way round a defect of Fast DDS 2.9.1's TCP transport: a
-  // participant that starts while another one connects or leaves may never meet anyone (about
-  // one start in twenty beside a starting gateway: docs/remote-benches.md), while a new one does.
-  // Over TCP, a participant that has met no gateway kRejoinAfter after it joined is replaced by
-  // a new one, then again after twice as long, and so on; never once it has met a gateway or
-  // anything else (a command client) uses it. Over UDP discovery never stalled like that, and
-  // rejoining would only add to the load that slows discovery down.
+  // view_.wait_until, replacing a participant stalled over TCP (dds::TcpRejoin) meanwhile.
   bool wait_until(const ValveView::Condition& condition, Deadline until) {
     for (;;) {
-      const bool may_rejoin = rejoin_after_ > milliseconds::zero() && participant_->uses_tcp();
-      const Deadline rejoin_at = may_rejoin ? joined_at_ + rejoin_after_ : Deadline::max();
-      if (view_->wait_until(condition, std::min(until, rejoin_at), terminal_.interrupted)) {
+      if (view_->wait_until(condition, std::min(until, rejoin_.due()), terminal_.interrupted)) {
         return true;
       }
       if (terminal_.interrupted || Clock::now() >= until) return false;
-      if (!participant_->participants_with_role(dds::kGatewayRole).empty()) {
-        rejoin_after_ = milliseconds::zero();
-        continue;
-      }
-      rejoin();
+      if (rejoin_.replace(*participant_, Clock::now())) rejoin();
     }
   }
 
   void rejoin() {
-    terminal_.err << "valvectl: met no gateway within " << seconds_text(rejoin_after_)
+    terminal_.err << "valvectl: met no gateway within "
+                  << seconds_text(std::chrono::duration_cast<milliseconds>(rejoin_.waited()))
                   << " over TCP; joining " << domain_text() << " again\n"
                   << std::flush;
     // The old participant goes first: a new one that met it leaving would be in the very
@@ -198,11 +184,7 @@ class Session {
       complain("cannot join again: " + joined.error().reason);
       throw JoinFailed{};
     }
-    rejoin_after_ *= 2;
   }
-
-  // Once something else holds the participant, it stays.
-  void keep_participant() { rejoin_after_ = milliseconds::zero(); }
 
   Deadline after_timeout() const { return Clock::now() + invocation_.global.timeout; }
 
@@ -289,7 +271,7 @@ class Session {
   template <class Request, class Unmatched>
   std::variant<std::unique_ptr<RequestClient<Request>>, int> connected_client(
       const std::set<std::string>& owners, std::size_t readers, Unmatched unmatched) {
-    keep_participant();
+    rejoin_.keep();  // the command client holds it
     auto made = RequestClient<Request>::create(*participant_, default_origin("valvectl"));
     if (!made) {
       complain(made.error().reason);
@@ -726,8 +708,7 @@ class Session {
   const Terminal& terminal_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<ValveView> view_;  // destroyed before the participant: its readers go first
-  Deadline joined_at_;
-  milliseconds rejoin_after_ = kRejoinAfter;  // zero: the participant stays
+  dds::TcpRejoin rejoin_;
 };
 
 }  // namespace
