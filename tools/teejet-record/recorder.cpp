@@ -15,6 +15,7 @@
 #include "teejet/dds/topics.hpp"
 #include "teejet/mcap/writer.hpp"
 #include "teejet/recording/catalog.hpp"
+#include "teejet/recording/latest_samples.hpp"
 
 namespace teejet::record {
 namespace {
@@ -121,15 +122,6 @@ class TopicReaders {
   eprosima::fastdds::dds::WaitSet wait_set_;
   std::vector<TakenSample> taken_;  // kept between takes for its capacity
 };
-
-// The last sample of each instance, per topic: what a disposal's channel shows (a disposal
-// itself carries no key on Fast DDS 2.9, whose DataReader::get_key_value is unsupported), and
-// what each new file of a split recording starts with.
-struct LastSample {
-  std::uint64_t source_ns = 0;
-  std::vector<std::uint8_t> payload;
-};
-using LastSamples = std::map<std::pair<std::size_t, recording::InstanceHandle>, LastSample>;
 
 // One MCAP file of the recording with a channel per subscribed topic.
 // The recorder's participant and its readers; made afresh when it joins again.
@@ -262,17 +254,10 @@ class Recording {
     const TopicType& type = *types_[topic];
     const std::uint64_t log_time = sample.received_ns;
     const std::uint64_t publish_time = sample.source_ns != 0 ? sample.source_ns : log_time;
-    const auto key = std::pair{topic, sample.instance};
-    if (sample.disposed) {
-      const auto last = last_samples_.find(key);
-      if (last == last_samples_.end()) {
-        ++progress_.unknown_disposals;
-        return {};
-      }
-      sample.payload = std::move(last->second.payload);
-      last_samples_.erase(last);
-    } else if (type.keyed && type.durable) {
-      last_samples_[key] = LastSample{publish_time, sample.payload};
+    // Its last sample names a disposed instance; a split file starts with the last of each.
+    if (!last_samples_.admit(topic, type, sample)) {
+      ++progress_.unknown_disposals;
+      return {};
     }
     if (auto written =
             file_->write(topic, type, sample.disposed, log_time, publish_time, sample.payload);
@@ -331,7 +316,7 @@ class Recording {
     if (auto opened = open_next(); !opened) return opened;
     const std::uint64_t now = timeline_.now().timeline;
     messages_in_file_ = 0;
-    for (const auto& [key, last] : last_samples_) {
+    for (const auto& [key, last] : last_samples_.held()) {
       if (auto written =
               file_->write(key.first, *types_[key.first], false, now, last.source_ns, last.payload);
           !written) {
@@ -359,7 +344,7 @@ class Recording {
   int file_index_ = 0;
   std::uint64_t messages_in_file_ = 0;  // not counting the state a split file starts with
   std::uint64_t closed_bytes_ = 0;
-  LastSamples last_samples_;
+  recording::LatestSamples last_samples_;
   Progress progress_;
 };
 
