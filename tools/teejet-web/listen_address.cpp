@@ -6,12 +6,16 @@
 
 namespace teejet::web {
 
-Result<std::string> parse_listen(std::string_view text) {
+Result<std::string> parse_listen(std::string_view text, std::string_view option,
+                                 std::string_view example) {
   const auto fail = [&](const std::string& why) {
-    return Error{ErrorCode::kInvalidValue, "--listen '" + std::string(text) + "': " + why};
+    return Error{ErrorCode::kInvalidValue,
+                 std::string(option) + " '" + std::string(text) + "': " + why};
   };
   const auto colon = text.rfind(':');
-  if (colon == std::string_view::npos) return fail("expected ADDR:PORT, e.g. 127.0.0.1:8080");
+  if (colon == std::string_view::npos) {
+    return fail("expected ADDR:PORT, e.g. " + std::string(example));
+  }
   std::string host(text.substr(0, colon));
   const std::string_view port_text = text.substr(colon + 1);
   unsigned port = 0;
@@ -21,7 +25,7 @@ Result<std::string> parse_listen(std::string_view text) {
       port < 1 || port > 65535) {
     return fail("the port must be a number from 1 to 65535");
   }
-  // CivetWeb would take a host name or an empty address as "every interface": only literals.
+  // A host name, or an empty address, could mean every interface: only literals.
   unsigned char address[16];
   if (host.size() > 2 && host.front() == '[' && host.back() == ']') {
     if (inet_pton(AF_INET6, host.substr(1, host.size() - 2).c_str(), address) != 1) {

@@ -12,8 +12,9 @@ namespace teejet::web {
 
 inline constexpr const char* kDefaultListen = "127.0.0.1:8080";
 
-// The value for CivetWeb's listening_ports ("127.0.0.1:8080", "[::1]:8080"), or an Error naming
-// what is wrong with `text`.
-Result<std::string> parse_listen(std::string_view text);
+// "ADDRESS:PORT" with the address a literal ("127.0.0.1:8080", "[::1]:8080"), or an Error naming
+// `option` and what is wrong with `text` (a missing port shown with `example`).
+Result<std::string> parse_listen(std::string_view text, std::string_view option = "--listen",
+                                 std::string_view example = kDefaultListen);
 
 }  // namespace teejet::web

@@ -8,6 +8,7 @@
 #include "teejet/client/command_check.hpp"
 #include "teejet/client/json.hpp"
 #include "teejet/codec/table.hpp"
+#include "teejet/dds/conversions.hpp"
 #include "token_guard.hpp"
 
 namespace teejet::web {
@@ -61,15 +62,19 @@ std::vector<std::string_view> fields_of(const Shape& shape) {
   return fields;
 }
 
+Result<std::uint32_t> in_table(std::uint32_t serial, const client::ValveTable& table) {
+  if (!table.row(serial)) {
+    return refused("unknown serial " + codec::format_serial(serial) + ": no gateway knows it");
+  }
+  return serial;
+}
+
 Result<std::uint32_t> known_serial(const json& value, const client::ValveTable& table) {
   if (!value.is_string()) return refused("serial must be a string like \"TJV000001\"");
   const auto text = value.get<std::string>();
   const auto serial = codec::parse_serial(text);
   if (!serial) return refused("invalid serial: " + serial.error().reason);
-  if (!table.row(*serial)) {
-    return refused("unknown serial " + codec::format_serial(*serial) + ": no gateway knows it");
-  }
-  return *serial;
+  return in_table(*serial, table);
 }
 
 // Whether `message` of command `name` has every `required` field and no field but those, the
@@ -174,7 +179,29 @@ Result<ValveCommand> build(const Shape& shape, const json& page) {
   return command;
 }
 
-// Whether no array or object of `text` lies deeper than `max_depth`, counted without parsing.
+// The message parsed (discarded when it is not JSON), or why it is not even read.
+Result<json> read_message(std::string_view text) {
+  if (text.size() > kMaxCommandBytes) {
+    return refused("message of " + std::to_string(text.size()) + " bytes is over the limit of " +
+                   std::to_string(kMaxCommandBytes));
+  }
+  if (!nested_within(text, kMaxJsonDepth)) {
+    return refused("JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+  }
+  return json::parse(text, nullptr, /*allow_exceptions=*/false);
+}
+
+// The page's "id" when it is safe to send back, null otherwise.
+json echoed_id(const Result<json>& message) {
+  if (!message || !message->is_object() || !message->contains("id")) return nullptr;
+  const json& id = message->at("id");
+  if (id.is_number()) return id;
+  if (id.is_string() && id.get_ref<const std::string&>().size() <= kMaxIdBytes) return id;
+  return nullptr;
+}
+
+}  // namespace
+
 bool nested_within(std::string_view text, int max_depth) {
   int depth = 0;
   bool in_string = false;
@@ -198,29 +225,6 @@ bool nested_within(std::string_view text, int max_depth) {
   }
   return true;
 }
-
-// The message parsed (discarded when it is not JSON), or why it is not even read.
-Result<json> read_message(std::string_view text) {
-  if (text.size() > kMaxCommandBytes) {
-    return refused("message of " + std::to_string(text.size()) + " bytes is over the limit of " +
-                   std::to_string(kMaxCommandBytes));
-  }
-  if (!nested_within(text, kMaxJsonDepth)) {
-    return refused("JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
-  }
-  return json::parse(text, nullptr, /*allow_exceptions=*/false);
-}
-
-// The page's "id" when it is safe to send back, null otherwise.
-json echoed_id(const Result<json>& message) {
-  if (!message || !message->is_object() || !message->contains("id")) return nullptr;
-  const json& id = message->at("id");
-  if (id.is_number()) return id;
-  if (id.is_string() && id.get_ref<const std::string&>().size() <= kMaxIdBytes) return id;
-  return nullptr;
-}
-
-}  // namespace
 
 Result<PageCommand> parse_page_command(std::string_view text, const client::ValveTable& table) {
   const auto message = read_message(text);
@@ -269,6 +273,17 @@ Result<PageCommand> check_page_command(const json& message, const client::ValveT
   if (!command) return refused(name + ": " + command.error().reason);
   checked.command = std::move(*command);
   return checked;
+}
+
+Result<PageCommand> check_published_command(const ValveCommand& published,
+                                            const client::ValveTable& table) {
+  const auto serial = in_table(published.serial(), table);
+  if (!serial) return serial.error();
+  const auto message = dds::to_message(published);
+  if (!message) return refused(message.error().reason);
+  auto command = client::checked_command(*message);
+  if (!command) return refused(command.error().field + " " + command.error().complaint);
+  return PageCommand{{*serial}, std::move(*command)};
 }
 
 Result<PageLayoutChange> check_page_layout_change(const json& message,
@@ -359,6 +374,18 @@ json page_protocol_json() {
   return {{"commands", commands}, {"telemetry", telemetry}};
 }
 
+std::optional<std::string> policy_refusal(const CommandPolicy& policy,
+                                          std::optional<std::string_view> token,
+                                          const TokenCheck& check_token) {
+  if (!policy.allow_commands) return kReadOnly;
+  if (policy.token.empty()) return std::nullopt;
+  constexpr const char* kWrongToken = "missing or wrong \"token\"";
+  if (!token) return kWrongToken;
+  if (check_token) return check_token(*token);
+  if (!tokens_equal(*token, policy.token)) return kWrongToken;
+  return std::nullopt;
+}
+
 json command_policy_json(const CommandPolicy& policy) {
   return {{"allowed", policy.allow_commands}, {"token_required", !policy.token.empty()}};
 }
@@ -375,17 +402,12 @@ json handle_page_message(std::string_view text, const client::ValveTable& table,
   if (!policy.allow_commands) return refuse(kReadOnly);
   if (!message) return refuse(message.error().reason);
   // What is not even an object is refused below for what it is; it can carry no command.
-  if (!policy.token.empty() && message->is_object()) {
-    constexpr const char* kWrongToken = "missing or wrong \"token\"";
-    if (!message->contains("token") || !message->at("token").is_string()) {
-      return refuse(kWrongToken);
+  if (message->is_object()) {
+    std::optional<std::string_view> token;
+    if (message->contains("token") && message->at("token").is_string()) {
+      token = message->at("token").get_ref<const std::string&>();
     }
-    const auto& token = message->at("token").get_ref<const std::string&>();
-    if (check_token) {
-      if (const auto refusal = check_token(token)) return refuse(*refusal);
-    } else if (!tokens_equal(token, policy.token)) {
-      return refuse(kWrongToken);
-    }
+    if (const auto refusal = policy_refusal(policy, token, check_token)) return refuse(*refusal);
   }
   const bool layout_change =
       message->is_object() && message->contains("command") &&

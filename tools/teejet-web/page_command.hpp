@@ -29,6 +29,10 @@ inline constexpr int kMaxJsonDepth = 4;
 // An "id" the answer echoes: a number, or a string of at most this many bytes (null otherwise).
 inline constexpr std::size_t kMaxIdBytes = 64;
 
+// Whether no array or object of `text` lies deeper than `max_depth`, counted without parsing:
+// what a client sends is refused before a parser or dump() recurses into it.
+bool nested_within(std::string_view text, int max_depth);
+
 // A checked command: what to write, to which valves (several for stop_all).
 struct PageCommand {
   std::vector<std::uint32_t> serials;
@@ -49,6 +53,12 @@ Result<PageCommand> parse_page_command(std::string_view text, const client::Valv
 // The same for a message already parsed (discarded when it was not JSON).
 Result<PageCommand> check_page_command(const nlohmann::json& message,
                                        const client::ValveTable& table);
+
+// A command a client wrote as a whole ValveCommand (a Foxglove client publishes them): the valve
+// must be in the table, and its kind and fields pass the codec's checks as the page's commands
+// do. Its serial is kept; command_id and origin are the sender's.
+Result<PageCommand> check_published_command(const ValveCommand& published,
+                                            const client::ValveTable& table);
 
 // {"command":"assign","location":"section-03","serial":"TJV000007","move":false} ("move"
 // optional) or {"command":"unassign","location":"section-03"}: the place must be in exactly one
@@ -85,6 +95,14 @@ nlohmann::json command_policy_json(const CommandPolicy& policy);
 
 // The refusal of a token, nullopt when it is accepted: a TokenGuard in teejet-web.
 using TokenCheck = std::function<std::optional<std::string>(std::string_view token)>;
+
+// Why no command of a client is taken whatever it asks (read-only; a token missing, nullopt, or
+// wrong), nullopt when its commands may be checked. The page's messages and a Foxglove client's
+// publishes both pass here. With a token in `policy`, `token` goes to `check_token` (when given;
+// compared with the policy's otherwise).
+std::optional<std::string> policy_refusal(const CommandPolicy& policy,
+                                          std::optional<std::string_view> token,
+                                          const TokenCheck& check_token = {});
 
 // The answer to one message from the page:
 // {"type":"sent","id":ID,"commands":[{"serial":"TJV000001","command_id":7}]} (a command DDS did

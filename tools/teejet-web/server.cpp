@@ -31,6 +31,7 @@
 #include <utility>
 #include <vector>
 
+#include "beast_transport.hpp"
 #include "dashboard_json.hpp"
 #include "page_admission.hpp"
 #include "page_files.hpp"
@@ -66,7 +67,11 @@ constexpr auto kHandshakeTimeout = 10s;
 constexpr auto kPageIdleTimeout = 30s;
 constexpr int kPageSendBuffer = 64 * 1024;
 
-using Request = http::request<http::empty_body>;
+using transport::ConnectionSlot;
+using transport::endpoint;
+using transport::header;
+using transport::Request;
+using transport::SentIds;
 using Response = http::response<http::string_body>;
 
 // The one place where the headers every response carries (the WebSocket's 101 too) are set:
@@ -85,12 +90,6 @@ std::chrono::seconds page_idle_timeout() {
   const char* text = std::getenv("TEEJET_WEB_PAGE_IDLE_S");
   const long seconds = text == nullptr ? 0 : std::strtol(text, nullptr, 10);
   return seconds > 0 ? std::chrono::seconds(seconds) : kPageIdleTimeout;
-}
-
-std::optional<std::string_view> header(const Request& request, http::field field) {
-  const auto found = request.find(field);
-  if (found == request.end()) return std::nullopt;
-  return std::string_view(found->value().data(), found->value().size());
 }
 
 // Plain TCP, or TLS over it, behind one type. Beast's HTTP and WebSocket code is most of this
@@ -328,45 +327,6 @@ struct Server::Impl {
 };
 
 namespace {
-
-// A connection's place under kMaxConnections, from accept to the socket's close; it moves from
-// the HTTP session into the page's.
-class ConnectionSlot {
- public:
-  explicit ConnectionSlot(Server::Impl& server) : server_(&server) { ++server.connections; }
-  ConnectionSlot(ConnectionSlot&& other) noexcept
-      : server_(std::exchange(other.server_, nullptr)) {}
-  ConnectionSlot& operator=(ConnectionSlot&&) = delete;
-  ~ConnectionSlot() {
-    if (server_ != nullptr) --server_->connections;
-  }
-
- private:
-  Server::Impl* server_;
-};
-
-// The ids one page message was sent with, for DdsSender::answered once its answer is out.
-class SentIds final : public CommandSender {
- public:
-  explicit SentIds(DdsSender& sender) : sender_(&sender) {}
-
-  Result<std::uint32_t> send(ValveCommand command) override {
-    auto id = sender_->send(std::move(command));
-    if (id) commands.push_back(*id);
-    return id;
-  }
-  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override {
-    auto id = sender_->send(std::move(change), participant);
-    if (id) changes.push_back(*id);
-    return id;
-  }
-
-  std::vector<std::uint32_t> commands;
-  std::vector<std::uint32_t> changes;
-
- private:
-  DdsSender* sender_;
-};
 
 // A page's WebSocket. Admitted already: it holds one of kMaxPages from its construction to its
 // destruction.
@@ -676,18 +636,6 @@ class TlsDetector final : public std::enable_shared_from_this<TlsDetector> {
   std::string answer_;
 };
 
-Result<tcp::endpoint> endpoint(const std::string& listen) {
-  const auto colon = listen.rfind(':');
-  std::string host = listen.substr(0, colon);
-  if (host.size() > 2 && host.front() == '[') host = host.substr(1, host.size() - 2);
-  beast::error_code error;
-  const auto address = asio::ip::make_address(host, error);
-  if (colon == std::string::npos || error) {
-    return Error{ErrorCode::kUnavailable, "cannot listen on " + listen};
-  }
-  return tcp::endpoint(address, static_cast<unsigned short>(std::stoi(listen.substr(colon + 1))));
-}
-
 }  // namespace
 
 Response Server::Impl::respond(const Request& request) const {
@@ -735,11 +683,11 @@ void Server::Impl::accept() {
       socket.set_option(tcp::no_delay(true), error);
       if (tls) {
         std::make_shared<TlsDetector>(*this, beast::tcp_stream(std::move(socket)),
-                                      ConnectionSlot(*this))
+                                      ConnectionSlot(connections))
             ->run();
       } else {
         std::make_shared<HttpSession>(*this, ByteStream(beast::tcp_stream(std::move(socket))),
-                                      ConnectionSlot(*this))
+                                      ConnectionSlot(connections))
             ->read_request();
       }
     }
