@@ -1,7 +1,8 @@
 // teejet-web: the bench dashboard's server (issue 13). A DDS participant that keeps the client's
 // table of valves and serves it over HTTP (GET /api/valves) and a WebSocket (/ws) that pushes one
-// batched update per tick and, with --allow-commands, takes commands. The JSON is the core's
-// (dashboard_json, page_command), DDS commands the sender's, HTTP the server's: this file is
+// batched update per tick and, with --allow-commands, takes commands; with --foxglove, every
+// topic to Foxglove or Lichtblick too. The JSON is the core's (dashboard_json, page_command), DDS
+// commands the sender's, HTTP the server's, Foxglove's protocol foxglove_server's: this file is
 // the command line and the order of the steps.
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "foxglove_server.hpp"
 #include "listen_address.hpp"
 #include "request_guard.hpp"
 #include "sender.hpp"
@@ -50,6 +52,7 @@ struct Options {
   std::string tls_cert;
   std::string tls_key;
   std::shared_ptr<web::TlsIdentity> tls;  // after parse(): loaded from both, or none
+  std::string foxglove;                   // after parse(): "ADDRESS:PORT"; empty: no Foxglove
 };
 
 // One of --token-file, TEEJET_WEB_TOKEN and --token; nothing when none is given.
@@ -116,6 +119,9 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
                  "--tls-key");
   app.add_option("--tls-key", options.tls_key,
                  "the certificate's private key in FILE (PEM, unencrypted, mode 600)");
+  app.add_option("--foxglove", options.foxglove,
+                 "serve every topic to Foxglove or Lichtblick on [ADDR:]PORT (WebSocket; a port "
+                 "alone is on 127.0.0.1, e.g. 8765); off without it");
   app.add_option("--www", options.www,
                  "directory of the page (default: www next to the executable, then "
                  "../share/teejet-web/www)");
@@ -129,6 +135,24 @@ std::optional<int> parse(int argc, char** argv, Options& options) {
     return kExitUsage;
   }
   options.listen = *listen;
+  if (!options.foxglove.empty()) {
+    // A port alone: loopback, as an address must be typed to reach further.
+    if (options.foxglove.find_first_not_of("0123456789") == std::string::npos) {
+      options.foxglove = "127.0.0.1:" + options.foxglove;
+    }
+    const auto foxglove =
+        web::parse_listen(options.foxglove, "--foxglove", web::kDefaultFoxgloveListen);
+    if (!foxglove) {
+      std::cerr << "teejet-web: " << foxglove.error().reason << '\n';
+      return kExitUsage;
+    }
+    if (*foxglove == options.listen) {
+      std::cerr << "teejet-web: --foxglove and --listen are both " << *foxglove
+                << ": give each its own port\n";
+      return kExitUsage;
+    }
+    options.foxglove = *foxglove;
+  }
   for (std::string& name : options.allowed_hosts) {
     const auto allowed = web::parse_allowed_host(name);
     if (!allowed) {
@@ -182,6 +206,16 @@ void announce(const Options& options, const std::filesystem::path& www) {
             << "/ (domain " << options.domain << ", "
             << (options.allow_commands ? "commands allowed" : "read-only") << ", page from "
             << www.string() << ")\n";
+  if (options.foxglove.empty()) return;
+  if (!options.token.empty() && !web::loopback_listen(options.foxglove)) {
+    std::cerr << "teejet-web: warning: Foxglove's token travels in clear over ws://"
+              << options.foxglove << ": anyone on that network can read it\n";
+  }
+  std::cerr << "teejet-web: Foxglove: ws://" << options.foxglove << "/ ("
+            << (options.allow_commands && !options.token.empty()
+                    ? "commands with ?token= in the URL"
+                    : "read-only")
+            << ")\n";
 }
 
 std::uint64_t unix_ms() {
@@ -225,6 +259,19 @@ int main(int argc, char** argv) {
        .tls = options.tls},
       *dds->view, sender);
   if (!server) return fail(server.error());
+  std::unique_ptr<web::FoxgloveServer> foxglove;  // declared after the server: goes first
+  if (!options.foxglove.empty()) {
+    auto started = web::FoxgloveServer::start(
+        {.listen = options.foxglove,
+         .policy = {options.allow_commands, options.token},
+         .hosts =
+             web::allowed_hosts(options.foxglove, web::local_addresses(), options.allowed_hosts),
+         .name =
+             "teejet-web " TEEJET_VERSION " (DDS domain " + std::to_string(options.domain) + ")"},
+        *dds->participant, *dds->view, sender);
+    if (!started) return fail(started.error());
+    foxglove = std::move(*started);
+  }
   announce(options, *www);
   run_ticks(**server, stop);
   return 0;
