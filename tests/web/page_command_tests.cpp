@@ -14,28 +14,7 @@ namespace {
 
 using nlohmann::json;
 
-// Records what would have been written to DDS.
-class RecordingSender final : public CommandSender {
- public:
-  Result<std::uint32_t> send(ValveCommand command) override {
-    if (failing) return Error{ErrorCode::kInvalidValue, "no gateway subscribes to commands"};
-    command.command_id(next_id_++);
-    sent.push_back(command);
-    return command.command_id();
-  }
-  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override {
-    if (failing) return Error{ErrorCode::kInvalidValue, "gateway gw did not subscribe"};
-    change.change_id(next_id_++);
-    changes.emplace_back(change, participant);
-    return change.change_id();
-  }
-  bool failing = false;
-  std::vector<ValveCommand> sent;
-  std::vector<std::pair<LayoutChange, std::string>> changes;  // with the gateway's participant
-
- private:
-  std::uint32_t next_id_ = 100;
-};
+using testing::RecordingSender;
 
 const CommandPolicy kAllow{true, ""};
 

@@ -1,9 +1,14 @@
 #pragma once
 
-// A valve table as a gateway with a few valves would leave it, for the dashboard's tests.
+// A valve table as a gateway with a few valves would leave it, and a sender that records what
+// would have gone to DDS, for the dashboard's tests.
 
+#include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "page_command.hpp"
 #include "support/valve_samples.hpp"
 #include "teejet/client/valve_table.hpp"
 
@@ -34,5 +39,28 @@ inline client::ValveTable three_valves_on_a_boom() {
   table.on_location(location("twice", "gw2", 1, std::nullopt, LOCATION_EMPTY), "01.0f.bb");
   return table;
 }
+
+// Records what would have been written to DDS.
+class RecordingSender final : public CommandSender {
+ public:
+  Result<std::uint32_t> send(ValveCommand command) override {
+    if (failing) return Error{ErrorCode::kInvalidValue, "no gateway subscribes to commands"};
+    command.command_id(next_id_++);
+    sent.push_back(command);
+    return command.command_id();
+  }
+  Result<std::uint32_t> send(LayoutChange change, const std::string& participant) override {
+    if (failing) return Error{ErrorCode::kInvalidValue, "gateway gw did not subscribe"};
+    change.change_id(next_id_++);
+    changes.emplace_back(change, participant);
+    return change.change_id();
+  }
+  bool failing = false;
+  std::vector<ValveCommand> sent;
+  std::vector<std::pair<LayoutChange, std::string>> changes;  // with the gateway's participant
+
+ private:
+  std::uint32_t next_id_ = 100;
+};
 
 }  // namespace teejet::web::testing
