@@ -223,6 +223,7 @@ install_npm_packages() {
 install_debian_packages
 if ! ((build_only)); then
   install_npm_packages tests/mcap-js "the independent MCAP reader"
+  install_npm_packages tests/foxglove-layout "the Foxglove layout check"
   install_npm_packages tests/foxglove "the Foxglove WebSocket test client"
   install_npm_packages tools/teejet-web/qr "the dashboard's QR decoder"
 fi
