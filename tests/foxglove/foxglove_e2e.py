@@ -45,7 +45,7 @@ sys.path.insert(0, os.path.join(here, "..", "support"))
 sys.path.insert(0, os.path.join(here, "..", "recording"))
 from waiting import Timeout, eventually  # noqa: E402 (tests/support)
 sys.path.insert(0, os.path.join(here, "..", "web"))
-from recording_e2e import Failure, Run, check, wait_for_line  # noqa: E402 (tests/recording)
+from recording_e2e import Failure, Run, check, print_failure, wait_for_line  # noqa: E402
 from web_client import PING, PONG, TEXT, WebSocket  # noqa: E402 (tests/web)
 from web_client import Failure as ClientFailure  # noqa: E402 (tests/web)
 
@@ -440,13 +440,7 @@ def main():
         try:
             CASES[args.case](run)
         except (Failure, ClientFailure, Timeout, subprocess.TimeoutExpired) as failure:
-            print(f"FAIL: {failure}")
-            for name in sorted(os.listdir(work)):
-                if name.endswith(".err"):
-                    with open(os.path.join(work, name), errors="replace") as f:
-                        tail = f.read()[-2000:]
-                    if tail.strip():
-                        print(f"--- {name}\n{tail}")
+            print_failure(failure, work)
             return 1
         finally:
             run.cleanup()

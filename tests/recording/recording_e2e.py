@@ -56,6 +56,17 @@ def wait_for_line(path, text, deadline_s, proc):
                interval=0.02, alive=running)
 
 
+def print_failure(failure, work):
+    """FAIL and the reason, then the end of every program's stderr in `work`."""
+    print(f"FAIL: {failure}")
+    for name in sorted(os.listdir(work)):
+        if name.endswith(".err"):
+            with open(os.path.join(work, name), errors="replace") as f:
+                tail = f.read()[-2000:]
+            if tail.strip():
+                print(f"--- {name}\n{tail}")
+
+
 class Run:
     def __init__(self, args, work):
         self.args = args
@@ -686,13 +697,7 @@ def main():
             print(f"SKIP: {skipped}")
             return SKIP
         except (Failure, Timeout, subprocess.TimeoutExpired) as failure:
-            print(f"FAIL: {failure}")
-            for name in sorted(os.listdir(work)):
-                if name.endswith(".err"):
-                    with open(os.path.join(work, name), errors="replace") as f:
-                        tail = f.read()[-2000:]
-                    if tail.strip():
-                        print(f"--- {name}\n{tail}")
+            print_failure(failure, work)
             return 1
         finally:
             run.cleanup()

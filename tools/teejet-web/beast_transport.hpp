@@ -42,6 +42,18 @@ inline Result<boost::asio::ip::tcp::endpoint> endpoint(const std::string& listen
       address, static_cast<unsigned short>(std::stoi(listen.substr(colon + 1))));
 }
 
+// Opens `acceptor` on `address` and listens (reusing the address, as a restarted server must);
+// the first error.
+inline boost::system::error_code listen_on(boost::asio::ip::tcp::acceptor& acceptor,
+                                           const boost::asio::ip::tcp::endpoint& address) {
+  boost::system::error_code error;
+  acceptor.open(address.protocol(), error);
+  if (!error) acceptor.set_option(boost::asio::ip::tcp::acceptor::reuse_address(true), error);
+  if (!error) acceptor.bind(address, error);
+  if (!error) acceptor.listen(boost::asio::socket_base::max_listen_connections, error);
+  return error;
+}
+
 // A connection's place under its server's cap, from accept to the socket's close; it moves from
 // the handshake's session into the WebSocket's. `open` counts a server's connections.
 class ConnectionSlot {

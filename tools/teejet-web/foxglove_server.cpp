@@ -545,12 +545,7 @@ Result<std::unique_ptr<FoxgloveServer>> FoxgloveServer::start(const FoxgloveOpti
     auto& ids = impl->channel_of[channel.topic];
     (channel.disposed ? ids.second : ids.first) = channel.id;
   }
-  beast::error_code error;
-  impl->acceptor.open(address->protocol(), error);
-  if (!error) impl->acceptor.set_option(tcp::acceptor::reuse_address(true), error);
-  if (!error) impl->acceptor.bind(*address, error);
-  if (!error) impl->acceptor.listen(asio::socket_base::max_listen_connections, error);
-  if (error) {
+  if (const auto error = transport::listen_on(impl->acceptor, *address)) {
     return Error{ErrorCode::kUnavailable,
                  "--foxglove: cannot listen on " + options.listen + ": " + error.message()};
   }

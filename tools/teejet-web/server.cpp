@@ -716,12 +716,7 @@ Result<std::unique_ptr<Server>> Server::start(const ServerOptions& options, clie
   const auto address = endpoint(options.listen);
   if (!address) return address.error();
   auto impl = std::make_unique<Impl>(options, view, sender, std::move(*files));
-  beast::error_code error;
-  impl->acceptor.open(address->protocol(), error);
-  if (!error) impl->acceptor.set_option(tcp::acceptor::reuse_address(true), error);
-  if (!error) impl->acceptor.bind(*address, error);
-  if (!error) impl->acceptor.listen(asio::socket_base::max_listen_connections, error);
-  if (error) {
+  if (const auto error = transport::listen_on(impl->acceptor, *address)) {
     return Error{ErrorCode::kUnavailable,
                  "cannot listen on " + options.listen + ": " + error.message()};
   }
