@@ -66,6 +66,10 @@ class Skip(Exception):
 
 
 class FoxgloveRun(Run):
+    def binary(self, relative):
+        """The programs are given one by one (so that a sanitizer build knows to build them)."""
+        return self.args.programs[os.path.basename(relative)]
+
     def start_web(self, *extra, env=None):
         web = self.start("web", [self.binary("tools/teejet-web/teejet-web"), "--listen",
                                  "127.0.0.1:18080", "--foxglove", str(PORT), *extra], env=env)
@@ -428,9 +432,12 @@ CASES = {"stream": case_stream, "late": case_late, "commands": case_commands,
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--build-dir", required=True)
+    for program in ("gateway", "web", "valvectl", "logger"):
+        parser.add_argument(f"--{program}", required=True, help=f"the {program} program to run")
     parser.add_argument("case", choices=sorted(CASES))
     args = parser.parse_args()
+    args.programs = {os.path.basename(path): path
+                     for path in (args.gateway, args.web, args.valvectl, args.logger)}
     if subprocess.run(["node", "--version"], capture_output=True).returncode != 0 or \
             not os.path.isdir(os.path.join(here, "node_modules")):
         print("FAIL: node or the packages of tests/foxglove are missing: run tools/install-deps.sh")
