@@ -13,7 +13,8 @@ client is Foxglove's own npm package (@foxglove/ws-protocol, decoding with
             valve reached that client. The channels carry the recording's encoding and schemas.
   late      a client that subscribes long after the valves announced themselves gets every
             valve's version (sent once, at start) and presence at once, equal to the
-            subscriber's; after an unsubscribe nothing more of it arrives.
+            subscriber's; after an unsubscribe nothing more of it arrives; once the gateway is
+            killed and its lease ends, a new subscription gets none of its valves.
   commands  with --allow-commands and a token: a ValveCommand the client publishes (CDR, encoded
             by Foxglove's writer) moves TJV000002 to 90 degrees; the client is told the command id,
             and its statuses ACCEPTED then COMPLETED arrive on teejet/valve/command_status.
@@ -199,7 +200,20 @@ def case_late(run):
                     line.get("unsubscribed")]
     check(events(lines, "unsubscribe"), f"the client sent no unsubscribe: {lines[-3:]}")
     check(not unsubscribed, f"{len(unsubscribed)} presences arrived after the unsubscribe")
-    print("late: every valve's version and presence at once; nothing after the unsubscribe")
+    # A gateway killed: once its lease ends (3 s in the loopback profile), a new subscription
+    # starts from nothing of it, not from valves that look online.
+    gateway = run.procs[0]
+    gateway.kill()
+    gateway.wait()
+
+    def presences_of_a_new_subscription():
+        lines = run.client("--subscribe", "teejet/valve/presence", "--duration-ms", "1000")
+        return [m["data"]["serial"] for m in messages(lines, "teejet/valve/presence")]
+    eventually(presences_of_a_new_subscription, 30,
+               "a new subscription without the killed gateway's valves", ok=lambda seen: not seen,
+               interval=0.5)
+    print("late: every valve's version and presence at once; nothing after the unsubscribe; "
+          "nothing of a killed gateway")
 
 
 def move_command(degrees, serial=2):

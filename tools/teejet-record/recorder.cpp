@@ -108,6 +108,8 @@ class TopicReaders {
       taken_.clear();
       readers_[i]->take(taken_);
       for (auto& sample : taken_) {
+        // A gateway that stopped or was lost: its valves' last samples stay the recording's word.
+        if (sample.writers_gone) continue;
         sample.received_ns = LogTimeline::place(sample.received_ns, now);
         pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
       }

@@ -550,10 +550,17 @@ Result<std::unique_ptr<FoxgloveServer>> FoxgloveServer::start(const FoxgloveOpti
                  "--foxglove: cannot listen on " + options.listen + ": " + error.message()};
   }
   Impl* raw = impl.get();
-  auto feed = foxglove::Feed::start(participant, [raw](std::vector<foxglove::FeedSample> batch) {
-    asio::post(raw->io,
-               [raw, batch = std::move(batch)]() mutable { raw->distribute(std::move(batch)); });
-  });
+  auto feed = foxglove::Feed::start(
+      participant,
+      [raw](std::vector<foxglove::FeedSample> batch) {
+        asio::post(raw->io, [raw, batch = std::move(batch)]() mutable {
+          raw->distribute(std::move(batch));
+        });
+      },
+      // A gateway gone: a new subscription must not start from valves that look online.
+      [raw](const recording::InstanceHandle& writer) {
+        asio::post(raw->io, [raw, writer] { raw->latest.forget_writer(writer); });
+      });
   if (!feed) return feed.error();
   impl->feed = std::move(*feed);
   impl->accept();

@@ -100,14 +100,17 @@ class TypedReader final : public TopicReader {
       taken.received_ns = to_ns(info.reception_timestamp);
       taken.source_ns = to_ns(info.source_timestamp);
       std::memcpy(taken.instance.data(), info.instance_handle.value, taken.instance.size());
+      std::memcpy(taken.writer.data(), info.publication_handle.value, taken.writer.size());
       if (info.valid_data) {
         SerializedPayload_t payload(type_.getSerializedSizeProvider(&sample)());
         if (!type_.serialize(&sample, &payload)) continue;  // cannot happen for a taken sample
         taken.payload.assign(payload.data, payload.data + payload.length);
       } else if (info.instance_state == NOT_ALIVE_DISPOSED_INSTANCE_STATE) {
         taken.disposed = true;
+      } else if (info.instance_state == NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
+        taken.writers_gone = true;
       } else {
-        continue;  // a writer left: nothing happened to the valve
+        continue;
       }
       out.push_back(std::move(taken));
     }

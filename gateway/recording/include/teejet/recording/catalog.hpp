@@ -44,17 +44,20 @@ struct TakenSample {
   std::uint64_t received_ns = 0;  // when this participant received it
   std::uint64_t source_ns = 0;    // the writer's source timestamp
   InstanceHandle instance{};      // zero for topics without a key
+  InstanceHandle writer{};        // the writer's (its GUID): whose word it is
   // A disposal carries no data: `payload` is empty and the recorder names the instance from the
   // last sample it saw of it.
   bool disposed = false;
+  // The instance has no writer left (its gateway stopped, or was lost): no data, nothing
+  // happened to the valve, so nothing to record; a cache of the present forgets the instance.
+  bool writers_gone = false;
   std::vector<std::uint8_t> payload;
 };
 
 class TopicReader {
  public:
   virtual ~TopicReader() = default;
-  // Appends what is waiting. Samples whose writer merely left (unregistered, no writers) carry
-  // nothing to record and are skipped.
+  // Appends what is waiting, an instance whose writers all left as a sample with writers_gone.
   virtual void take(std::vector<TakenSample>& out) = 0;
   virtual eprosima::fastdds::dds::DataReader* reader() const = 0;
 };

@@ -19,6 +19,7 @@ namespace teejet::recording {
 struct LatestSample {
   std::uint64_t source_ns = 0;  // its publish time: the writer's stamp, else its reception
   std::vector<std::uint8_t> payload;
+  InstanceHandle writer{};
 };
 
 class LatestSamples {
@@ -28,9 +29,14 @@ class LatestSamples {
 
   // Takes in `sample` of the topic with index `topic` and type `type`: a sample of a keyed state
   // topic is held; a disposal gets the payload of its instance's last sample, which is no longer
-  // held. False for a disposal of an instance never seen alive: nothing names it, it cannot be
-  // shown.
+  // held. False for a disposal of an instance never seen alive (nothing names it, it cannot be
+  // shown) and for an instance whose writers left, which is forgotten: the present no longer
+  // holds it.
   bool admit(std::size_t topic, const TopicType& type, TakenSample& sample);
+
+  // A writer is gone (its gateway stopped, or its participant was lost; Fast DDS 2.9 hands a
+  // reader no sample for that): the instances whose last word was its are forgotten.
+  void forget_writer(const InstanceHandle& writer);
 
   const std::map<Key, LatestSample>& held() const { return held_; }
 
