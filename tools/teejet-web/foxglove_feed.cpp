@@ -16,43 +16,19 @@ constexpr auto kLongestWait = std::chrono::milliseconds(100);
 
 }  // namespace
 
-// Tells of every writer that unmatched a reader of the feed.
-class WriterWatch final : public eprosima::fastdds::dds::DataReaderListener {
- public:
-  explicit WriterWatch(Feed::WriterGone gone) : gone_(std::move(gone)) {}
-
-  void on_subscription_matched(
-      eprosima::fastdds::dds::DataReader*,
-      const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
-    if (status.current_count_change >= 0) return;
-    recording::InstanceHandle writer;
-    std::memcpy(writer.data(), status.last_publication_handle.value, writer.size());
-    gone_(writer);
-  }
-
- private:
-  const Feed::WriterGone gone_;
-};
-
 struct Feed::Readers {
-  explicit Readers(WriterGone gone) : watch(std::move(gone)) {}
-  WriterWatch watch;                                             // declared first: goes last
   std::vector<std::unique_ptr<recording::TopicReader>> readers;  // by topic index
   eprosima::fastdds::dds::WaitSet wait_set;
 };
 
-Result<std::unique_ptr<Feed>> Feed::start(dds::Participant& participant, Deliver deliver,
-                                          WriterGone writer_gone) {
-  auto readers = std::make_unique<Readers>(std::move(writer_gone));
+Result<std::unique_ptr<Feed>> Feed::start(dds::Participant& participant, Deliver deliver) {
+  auto readers = std::make_unique<Readers>();
   // Made whole before anything can fail: the destructor deletes what was made.
   std::unique_ptr<Feed> feed(new Feed(participant, std::move(readers), std::move(deliver)));
   for (const recording::TopicType& type : recording::topic_types()) {
     auto reader = type.open_reader(participant);
     if (!reader) return reader.error();
-    auto* dds_reader = (*reader)->reader();
-    dds_reader->set_listener(&feed->readers_->watch,
-                             eprosima::fastdds::dds::StatusMask::subscription_matched());
-    auto& condition = dds_reader->get_statuscondition();
+    auto& condition = (*reader)->reader()->get_statuscondition();
     condition.set_enabled_statuses(eprosima::fastdds::dds::StatusMask::data_available());
     feed->readers_->wait_set.attach_condition(condition);
     feed->readers_->readers.push_back(std::move(*reader));
@@ -67,7 +43,7 @@ Feed::Feed(dds::Participant& participant, std::unique_ptr<Readers> readers, Deli
 Feed::~Feed() {
   stop_ = true;
   if (thread_.joinable()) thread_.join();
-  // Out of the WaitSet before their conditions go; deleted before their listener goes.
+  // Out of the WaitSet before their conditions go.
   for (const auto& reader : readers_->readers) {
     readers_->wait_set.detach_condition(reader->reader()->get_statuscondition());
     participant_.delete_reader(reader->reader());

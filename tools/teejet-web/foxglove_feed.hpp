@@ -25,20 +25,16 @@ struct FeedSample {
 class Feed {
  public:
   using Deliver = std::function<void(std::vector<FeedSample>)>;
-  // A writer of a topic is gone (deleted, or its participant lost): Fast DDS 2.9 hands a reader
-  // no sample for that, only the unmatch. Called from a Fast DDS thread.
-  using WriterGone = std::function<void(const recording::InstanceHandle& writer)>;
 
   // Subscribes to every topic on `participant` and calls `deliver` from its thread with what
   // each wake-up took; an Error names what DDS refused. `participant` must outlive the feed.
-  static Result<std::unique_ptr<Feed>> start(dds::Participant& participant, Deliver deliver,
-                                             WriterGone writer_gone);
-  // Stops the thread and deletes the readers: no callback runs after it returns.
+  static Result<std::unique_ptr<Feed>> start(dds::Participant& participant, Deliver deliver);
+  // Stops the thread and deletes the readers.
   ~Feed();
   Feed(const Feed&) = delete;
   Feed& operator=(const Feed&) = delete;
 
-  struct Readers;  // the readers, their WaitSet and listener, in foxglove_feed.cpp
+  struct Readers;  // the readers and their WaitSet, in foxglove_feed.cpp
 
  private:
   Feed(dds::Participant& participant, std::unique_ptr<Readers> readers, Deliver deliver);

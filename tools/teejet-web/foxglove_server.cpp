@@ -110,6 +110,10 @@ struct FoxgloveServer::Impl {
   void distribute(std::vector<foxglove::FeedSample> batch);
   void send_state(foxglove::Connection& connection, const foxglove::Subscription& subscription);
   void report();
+  // A gateway stopped or lost (the view's table, which follows its writers' liveliness and
+  // matches; Fast DDS 2.9 gives a reader no sample for either): a new subscription must not
+  // start from valves that look online.
+  void forget_lost_gateways();
 
   const FoxgloveOptions options;
   client::ValveView& view;
@@ -516,11 +520,20 @@ void FoxgloveServer::Impl::send_state(Connection& connection,
   }
 }
 
+void FoxgloveServer::Impl::forget_lost_gateways() {
+  std::set<std::string> lost;
+  for (const client::GatewaySummary& gateway : view.snapshot().gateways()) {
+    if (gateway.lost) lost.insert(gateway.participants.begin(), gateway.participants.end());
+  }
+  if (!lost.empty()) latest.forget_participants(lost);
+}
+
 void FoxgloveServer::Impl::report() {
   report_timer.expires_after(foxglove::kReportPeriod);
   report_timer.async_wait([this](beast::error_code error) {
     if (error) return;
     const auto now = SteadyClock::now();
+    forget_lost_gateways();
     // A connection may close itself while reporting: iterate over a copy.
     const std::vector<Connection*> open(clients.begin(), clients.end());
     for (Connection* client : open) client->report(now);
@@ -550,17 +563,10 @@ Result<std::unique_ptr<FoxgloveServer>> FoxgloveServer::start(const FoxgloveOpti
                  "--foxglove: cannot listen on " + options.listen + ": " + error.message()};
   }
   Impl* raw = impl.get();
-  auto feed = foxglove::Feed::start(
-      participant,
-      [raw](std::vector<foxglove::FeedSample> batch) {
-        asio::post(raw->io, [raw, batch = std::move(batch)]() mutable {
-          raw->distribute(std::move(batch));
-        });
-      },
-      // A gateway gone: a new subscription must not start from valves that look online.
-      [raw](const recording::InstanceHandle& writer) {
-        asio::post(raw->io, [raw, writer] { raw->latest.forget_writer(writer); });
-      });
+  auto feed = foxglove::Feed::start(participant, [raw](std::vector<foxglove::FeedSample> batch) {
+    asio::post(raw->io,
+               [raw, batch = std::move(batch)]() mutable { raw->distribute(std::move(batch)); });
+  });
   if (!feed) return feed.error();
   impl->feed = std::move(*feed);
   impl->accept();

@@ -1,5 +1,9 @@
 #include "teejet/recording/latest_samples.hpp"
 
+#include <cstring>
+
+#include "teejet/dds/participant.hpp"
+
 namespace teejet::recording {
 
 bool LatestSamples::admit(std::size_t topic, const TopicType& type, TakenSample& sample) {
@@ -20,8 +24,12 @@ bool LatestSamples::admit(std::size_t topic, const TopicType& type, TakenSample&
   return true;
 }
 
-void LatestSamples::forget_writer(const InstanceHandle& writer) {
-  std::erase_if(held_, [&](const auto& entry) { return entry.second.writer == writer; });
+void LatestSamples::forget_participants(const std::set<std::string>& participants) {
+  std::erase_if(held_, [&](const auto& entry) {
+    eprosima::fastrtps::rtps::InstanceHandle_t writer;
+    std::memcpy(writer.value, entry.second.writer.data(), entry.second.writer.size());
+    return participants.count(dds::participant_of(writer)) != 0;
+  });
 }
 
 }  // namespace teejet::recording

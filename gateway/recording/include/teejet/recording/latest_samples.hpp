@@ -9,6 +9,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <set>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -34,9 +36,10 @@ class LatestSamples {
   // holds it.
   bool admit(std::size_t topic, const TopicType& type, TakenSample& sample);
 
-  // A writer is gone (its gateway stopped, or its participant was lost; Fast DDS 2.9 hands a
-  // reader no sample for that): the instances whose last word was its are forgotten.
-  void forget_writer(const InstanceHandle& writer);
+  // Gateways are gone (stopped, or lost: Fast DDS 2.9 hands a reader no sample for either): the
+  // instances whose last word was a writer of one of these participants (as
+  // dds::participant_of names them) are forgotten.
+  void forget_participants(const std::set<std::string>& participants);
 
   const std::map<Key, LatestSample>& held() const { return held_; }
 
