@@ -16,6 +16,7 @@
 //   --duration-ms N           close and exit N ms after the open
 //   --until-messages N        exit once N messages arrived
 //   --until-topic-count T=N   (repeatable) exit once topic T got at least N messages
+//   --until-status TEXT       (repeatable) exit once a status message holding TEXT arrived
 //   --timeout-ms N            hard limit from the start: exit 3 naming what was awaited
 //                             (default 20000, or --duration-ms + 5000 when that is longer)
 //   --counts                  count messages instead of printing them; print counts at exit
@@ -73,7 +74,7 @@ const { MessageReader, MessageWriter } = omgidlSerialization;
 const USAGE =
   "usage: foxglove-client.mjs URL [--subprotocol NAME] [--token T] [--subscribe GLOB]... " +
   "[--subscribe-after-ms N] [--unsubscribe-after-ms N] [--duration-ms N] [--until-messages N] " +
-  "[--until-topic-count TOPIC=N]... [--timeout-ms N] [--counts] [--publish JSON]... " +
+  "[--until-topic-count TOPIC=N]... [--until-status TEXT]... [--timeout-ms N] [--counts] [--publish JSON]... " +
   "[--publish-topic T] [--publish-encoding E] [--publish-schema-name S] [--idl FILE] " +
   "[--publish-delay-ms N] [--publish-interval-ms N] [--never-read] [--pause-ms N]";
 
@@ -105,6 +106,7 @@ function parseArgs(argv) {
     durationMs: undefined,
     untilMessages: undefined,
     untilTopicCount: new Map(),
+    untilStatus: [],
     timeoutMs: undefined,
     counts: false,
     publish: [],
@@ -137,6 +139,7 @@ function parseArgs(argv) {
       args.untilTopicCount.set(v.slice(0, at), count(o, v.slice(at + 1)));
     },
     "--timeout-ms": (v, o) => (args.timeoutMs = count(o, v)),
+    "--until-status": (v) => args.untilStatus.push(v),
     "--publish": (v, o) => {
       let message;
       try {
@@ -209,7 +212,11 @@ function parseArgs(argv) {
     if (args.durationMs === undefined) {
       throw new UsageError("--never-read wants --duration-ms: how long to stay connected");
     }
-    if (args.untilMessages !== undefined || args.untilTopicCount.size > 0) {
+    if (
+      args.untilMessages !== undefined ||
+      args.untilTopicCount.size > 0 ||
+      args.untilStatus.length > 0
+    ) {
       throw new UsageError("--never-read reads nothing, so --until-* could never be met");
     }
   }
@@ -395,7 +402,10 @@ function completeValue(byName, field, given, where) {
 
 function run(args) {
   const patterns = args.subscribe.map(globToRegExp);
-  const hasUntil = args.untilMessages !== undefined || args.untilTopicCount.size > 0;
+  const hasUntil =
+    args.untilMessages !== undefined ||
+    args.untilTopicCount.size > 0 ||
+    args.untilStatus.length > 0;
   const state = {
     startedAt: performance.now(),
     openedAt: undefined,
@@ -417,6 +427,7 @@ function run(args) {
     finishing: false,
     closingOurselves: false,
     timers: [],
+    statuses: [],
   };
 
   const error = (message) => {
@@ -434,7 +445,7 @@ function run(args) {
         return false;
       }
     }
-    return true;
+    return args.untilStatus.every((text) => state.statuses.some((m) => m.includes(text)));
   };
 
   // What the run still waits for, for the timeout's and an early close's error line.
@@ -450,6 +461,9 @@ function run(args) {
     for (const [topic, n] of args.untilTopicCount) {
       const got = state.perTopic.get(topic) ?? 0;
       if (got < n) what.push(`--until-topic-count ${topic}=${n} (got ${got})`);
+    }
+    for (const text of args.untilStatus) {
+      if (!state.statuses.some((m) => m.includes(text))) what.push(`--until-status '${text}'`);
     }
     if (!state.publishesDone) {
       what.push(`the --publish messages (${state.published} of ${args.publish.length} sent)`);
@@ -719,6 +733,8 @@ function run(args) {
   client.on("status", (message) => {
     const { op: _op, ...rest } = message;
     emit({ event: "status", ...rest });
+    state.statuses.push(String(message.message));
+    checkDone();
   });
 
   client.on("removeStatus", (message) => {

@@ -234,7 +234,8 @@ def case_commands(run):
         lines = run.client("--subprotocol", name, "--subscribe", "teejet/valve/command_status",
                            "--publish", move_command(90 if name == SUBPROTOCOLS[0] else 30),
                            "--until-topic-count", "teejet/valve/command_status=2",
-                           "--timeout-ms", "30000", token=TOKEN)
+                           "--until-status", "sent to TJV000002", "--timeout-ms", "30000",
+                           token=TOKEN)
         info = events(lines, "serverInfo")[0]
         check("clientPublish" in info["capabilities"] and info["supportedEncodings"] == ["cdr"],
               f"serverInfo with a token: {info}")
@@ -257,42 +258,44 @@ def case_commands(run):
     check(any(abs(p - 90) < 0.05 for p in positions), f"TJV000002 never reached 90: {positions}")
 
 
+def refused(run, text, *argv, token=None):
+    """A client that publishes as `argv` says and waits for the status saying `text`."""
+    lines = run.client(*argv, "--until-status", text, "--timeout-ms", "20000", token=token,
+                       expect=None)
+    one_status(lines, text)
+    return lines
+
+
 def case_refusals(run):
     web = valve_moving_session(run)
-    lines = run.client("--publish", move_command(90), "--timeout-ms", "10000", "--duration-ms",
-                       "2000", expect=None)
+    lines = refused(run, "advertise refused: commands are disabled: teejet-web runs read-only",
+                    "--publish", move_command(90))
     check("clientPublish" not in events(lines, "serverInfo")[0]["capabilities"],
           "a read-only teejet-web announces clientPublish")
-    one_status(lines, "advertise refused: commands are disabled: teejet-web runs read-only")
 
     web = run.restart_web(web, "--allow-commands")
-    lines = run.client("--publish", move_command(90), "--duration-ms", "2000", expect=None)
-    one_status(lines, "takes commands from Foxglove only with a token")
+    refused(run, "takes commands from Foxglove only with a token", "--publish", move_command(90))
 
     token_file = run.path("token")
     with open(token_file, "w") as f:
         f.write(TOKEN + "\n")
     os.chmod(token_file, 0o600)
     run.restart_web(web, "--allow-commands", "--token-file", token_file)
-    lines = run.client("--publish", move_command(90), "--duration-ms", "2000", expect=None)
-    one_status(lines, "commands need the token: connect with ws://HOST:PORT/?token=TOKEN")
-    lines = run.client("--publish", move_command(90), "--duration-ms", "2000", token="wrong", expect=None)
-    one_status(lines, 'command not sent: missing or wrong "token"')
-    lines = run.client("--publish", move_command(400), "--duration-ms", "2000", token=TOKEN,
-                       expect=None)
-    one_status(lines, "command not sent: target_degrees: degrees 400 is outside 0 to 359.9")
-    lines = run.client("--publish", move_command(90, serial=77), "--duration-ms", "2000",
-                       token=TOKEN, expect=None)
-    one_status(lines, "command not sent: unknown serial TJV000077: no gateway knows it")
+    refused(run, "commands need the token: connect with ws://HOST:PORT/?token=TOKEN",
+            "--publish", move_command(90))
+    refused(run, 'command not sent: missing or wrong "token"', "--publish", move_command(90),
+            token="wrong")
+    refused(run, "command not sent: target_degrees: degrees 400 is outside 0 to 359.9",
+            "--publish", move_command(400), token=TOKEN)
+    refused(run, "command not sent: unknown serial TJV000077: no gateway knows it",
+            "--publish", move_command(90, serial=77), token=TOKEN)
     idl = os.path.join(here, "..", "..", "idl", "teejet", "valve.idl")
-    lines = run.client("--publish-topic", "teejet/valve/presence", "--publish-schema-name",
-                       "teejet::ValvePresence", "--idl", idl, "--publish",
-                       json.dumps({"serial": 2}), "--duration-ms", "2000", token=TOKEN,
-                       expect=None)
-    one_status(lines, "(teejet/valve/presence) refused: only teejet/valve/command takes messages")
-    lines = run.client("--publish-encoding", "json", "--publish", move_command(90),
-                       "--duration-ms", "2000", token=TOKEN, expect=None)
-    one_status(lines, 'refused: encoding "json": only "cdr"')
+    refused(run, "(teejet/valve/presence) refused: only teejet/valve/command takes messages",
+            "--publish-topic", "teejet/valve/presence", "--publish-schema-name",
+            "teejet::ValvePresence", "--idl", idl, "--publish", json.dumps({"serial": 2}),
+            token=TOKEN)
+    refused(run, 'refused: encoding "json": only "cdr"', "--publish-encoding", "json",
+            "--publish", move_command(90), token=TOKEN)
     # None of them reached DDS: the subscriber heard no command at all.
     commands = run.logged("teejet/valve/command")
     check(not commands, f"refused commands reached DDS: {commands}")
