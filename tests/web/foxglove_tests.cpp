@@ -62,9 +62,12 @@ TEST(FoxgloveProtocol, ChannelsAreTheRecordingsTopicsWithDisposalChannelsOfState
   EXPECT_EQ(disposed->name, "teejet/valve/position/disposed");
   EXPECT_TRUE(disposed->disposed);
   EXPECT_EQ(disposed->topic, position->topic);
+  EXPECT_EQ(channel_id(position->topic, false), position->id);
+  EXPECT_EQ(channel_id(position->topic, true), disposed->id);
   // Commands are events: no disposal channel, as in a recording.
   ASSERT_NE(find_channel("teejet/valve/command"), nullptr);
   EXPECT_EQ(find_channel("teejet/valve/command/disposed"), nullptr);
+  EXPECT_EQ(channel_id(find_channel("teejet/valve/command")->topic, true), 0u);
   EXPECT_EQ(find_channel(0), nullptr);
   EXPECT_EQ(find_channel(static_cast<std::uint32_t>(all.size() + 1)), nullptr);
 }
@@ -171,16 +174,15 @@ TEST(FoxgloveOutbox, DropsAndCountsMessagesBeyondItsBoundButKeepsControlMessages
   EXPECT_EQ(outbox.start_write(), (Outbox::Write{Outbox::Kind::kText, "advertise"}));
 }
 
-TEST(FoxgloveOutbox, HoldsABoundedNumberOfStatusesAndClosesLast) {
+TEST(FoxgloveOutbox, HoldsABoundedNumberOfStatuses) {
   Outbox outbox;
   for (std::size_t i = 0; i < kMaxQueuedStatuses; ++i) EXPECT_TRUE(outbox.post_status("s"));
   EXPECT_FALSE(outbox.post_status("one too many"));
-  outbox.close("bye");
-  EXPECT_TRUE(outbox.closing());
-  EXPECT_FALSE(outbox.post_data("x"));
-  EXPECT_EQ(outbox.start_write(), (Outbox::Write{Outbox::Kind::kClose, "bye"}));
+  // A status written makes room for one more.
+  ASSERT_EQ(outbox.start_write(), (Outbox::Write{Outbox::Kind::kText, "s"}));
   outbox.write_done();
-  EXPECT_EQ(outbox.start_write(), std::nullopt);
+  EXPECT_TRUE(outbox.post_status("again"));
+  EXPECT_FALSE(outbox.post_status("one too many"));
 }
 
 TEST(FoxgloveSession, KeepsSubscriptionsByChannelAndRefusesBadOnesWithAStatus) {

@@ -178,6 +178,19 @@ const Channel* find_channel(std::string_view topic) {
   return found == all.end() ? nullptr : &*found;
 }
 
+std::uint32_t channel_id(std::size_t topic, bool disposed) {
+  // By topic index: the samples' channel and the disposals' (0: none).
+  static const std::vector<std::pair<std::uint32_t, std::uint32_t>> kIds = [] {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> ids(recording::topic_types().size());
+    for (const Channel& channel : channels()) {
+      (channel.disposed ? ids[channel.topic].second : ids[channel.topic].first) = channel.id;
+    }
+    return ids;
+  }();
+  if (topic >= kIds.size()) return 0;
+  return disposed ? kIds[topic].second : kIds[topic].first;
+}
+
 std::string server_info(std::string_view name, bool client_publish, std::string_view session_id) {
   json capabilities = json::array();
   json info{{"op", "serverInfo"},

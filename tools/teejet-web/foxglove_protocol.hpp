@@ -45,6 +45,8 @@ struct Channel {
 const std::vector<Channel>& channels();
 const Channel* find_channel(std::uint32_t id);
 const Channel* find_channel(std::string_view topic);
+// The id of the channel of topic index `topic`'s samples, or of its disposals; 0: none.
+std::uint32_t channel_id(std::size_t topic, bool disposed);
 
 enum class Level { kInfo = 0, kWarning = 1, kError = 2 };
 

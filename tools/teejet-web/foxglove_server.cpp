@@ -3,6 +3,7 @@
 
 #include "foxglove_server.hpp"
 
+#include <algorithm>
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -14,6 +15,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <iostream>
+#include <iterator>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -127,14 +129,13 @@ struct FoxgloveServer::Impl {
       static_cast<std::size_t>(foxglove::from_environment(
           "TEEJET_WEB_FOXGLOVE_QUEUE_KB", static_cast<long>(foxglove::kMaxQueuedBytes / 1024))) *
       1024;
-  // The channel of each topic's samples and of its disposals (0: none), by topic index.
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> channel_of;
   // Touched on the I/O thread only. Declared before the io_context: the connections its
   // handlers still own when it goes count themselves out of these.
   std::size_t connections = 0;
   std::set<foxglove::Connection*> clients;  // those that got their 101
   bool said_full = false;
   recording::LatestSamples latest;
+  std::set<std::string> forgotten;  // the lost participants whose samples left `latest`
   // Channels are advertised with their first message, as a recording adds them: a topic
   // nobody publishes costs a client nothing, and each channel carries the whole IDL (16 KB).
   std::vector<foxglove::Channel> advertised;
@@ -326,11 +327,6 @@ class Connection final : public std::enable_shared_from_this<Connection> {
     auto next = session.outbox.start_write();
     if (!next) return;
     auto self = shared_from_this();
-    if (next->kind == foxglove::Outbox::Kind::kClose) {
-      socket_.async_close(websocket::close_reason(websocket::close_code::policy_error, next->bytes),
-                          [self](beast::error_code) { self->stop(); });
-      return;
-    }
     written_ = std::move(next->bytes);
     socket_.text(next->kind == foxglove::Outbox::Kind::kText);
     socket_.async_write(asio::buffer(written_), [self](beast::error_code error, std::size_t) {
@@ -490,8 +486,7 @@ void FoxgloveServer::Impl::distribute(std::vector<foxglove::FeedSample> batch) {
     // Every sample goes through the state, whoever is subscribed: a client's subscription
     // starts from it.
     if (!latest.admit(sample.topic, types[sample.topic], sample.taken)) continue;
-    const auto [live, disposals] = channel_of[sample.topic];
-    const std::uint32_t channel = sample.taken.disposed ? disposals : live;
+    const std::uint32_t channel = foxglove::channel_id(sample.topic, sample.taken.disposed);
     if (channel == 0) continue;
     if (!is_advertised[channel]) {
       is_advertised[channel] = true;
@@ -525,7 +520,13 @@ void FoxgloveServer::Impl::forget_lost_gateways() {
   for (const client::GatewaySummary& gateway : view.snapshot().gateways()) {
     if (gateway.lost) lost.insert(gateway.participants.begin(), gateway.participants.end());
   }
-  if (!lost.empty()) latest.forget_participants(lost);
+  // Each participant once, when it is first lost: a dead gateway stays lost for good, and
+  // naming every held sample's participant each second would be work for nothing.
+  std::set<std::string> newly_lost;
+  std::set_difference(lost.begin(), lost.end(), forgotten.begin(), forgotten.end(),
+                      std::inserter(newly_lost, newly_lost.end()));
+  if (!newly_lost.empty()) latest.forget_participants(newly_lost);
+  forgotten = std::move(lost);
 }
 
 void FoxgloveServer::Impl::report() {
@@ -548,16 +549,11 @@ Result<std::unique_ptr<FoxgloveServer>> FoxgloveServer::start(const FoxgloveOpti
   const auto address = endpoint(options.listen);
   if (!address) return address.error();
   auto impl = std::make_unique<Impl>(options, view, sender);
-  impl->channel_of.resize(recording::topic_types().size());
   impl->is_advertised.resize(foxglove::channels().size() + 1);
   // Except the commands: a client publishes on them with their schema before any was sent.
   const foxglove::Channel* commands = foxglove::find_channel(dds::topics::kCommand);
   impl->advertised.push_back(*commands);
   impl->is_advertised[commands->id] = true;
-  for (const foxglove::Channel& channel : foxglove::channels()) {
-    auto& ids = impl->channel_of[channel.topic];
-    (channel.disposed ? ids.second : ids.first) = channel.id;
-  }
   if (const auto error = transport::listen_on(impl->acceptor, *address)) {
     return Error{ErrorCode::kUnavailable,
                  "--foxglove: cannot listen on " + options.listen + ": " + error.message()};

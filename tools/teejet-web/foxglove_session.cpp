@@ -22,7 +22,6 @@ const std::string& command_type_name() {
 }  // namespace
 
 bool Outbox::post_data(std::string frame) {
-  if (closing_) return false;
   if (data_bytes_ + frame.size() > max_queued_bytes_) {
     ++dropped_;
     return false;
@@ -33,34 +32,23 @@ bool Outbox::post_data(std::string frame) {
 }
 
 void Outbox::post_text(std::string text) {
-  if (closing_) return;
   waiting_.push_back({Kind::kText, false, std::move(text)});
 }
 
 bool Outbox::post_status(std::string text) {
-  if (closing_ || statuses_ >= kMaxQueuedStatuses) return false;
+  if (statuses_ >= kMaxQueuedStatuses) return false;
   ++statuses_;
   waiting_.push_back({Kind::kText, true, std::move(text)});
   return true;
 }
 
-void Outbox::close(std::string reason) {
-  if (closing_) return;
-  closing_ = true;
-  waiting_.clear();
-  data_bytes_ = 0;
-  statuses_ = 0;
-  waiting_.push_back({Kind::kClose, false, std::move(reason)});
-}
-
 std::optional<Outbox::Write> Outbox::start_write() {
-  if (writing_ || closed_ || waiting_.empty()) return std::nullopt;
+  if (writing_ || waiting_.empty()) return std::nullopt;
   Queued next = std::move(waiting_.front());
   waiting_.pop_front();
   if (next.kind == Kind::kBinary) data_bytes_ -= next.bytes.size();
   if (next.status) --statuses_;
   writing_ = true;
-  if (next.kind == Kind::kClose) closed_ = true;
   return Write{next.kind, std::move(next.bytes)};
 }
 

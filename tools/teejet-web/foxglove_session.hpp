@@ -37,10 +37,10 @@ class Outbox {
   explicit Outbox(std::size_t max_queued_bytes = kMaxQueuedBytes)
       : max_queued_bytes_(max_queued_bytes) {}
 
-  enum class Kind { kText, kBinary, kClose };
+  enum class Kind { kText, kBinary };
   struct Write {
     Kind kind;
-    std::string bytes;  // the close's reason for kClose
+    std::string bytes;
     bool operator==(const Write&) const = default;
   };
 
@@ -51,17 +51,12 @@ class Outbox {
   void post_text(std::string text);
   // A status: queued unless kMaxQueuedStatuses wait already (then dropped, false).
   bool post_status(std::string text);
-  // Nothing more is queued; what waits is dropped and the next write is the close.
-  void close(std::string reason);
-
   // The next frame to write when none is being written and one waits.
   std::optional<Write> start_write();
   void write_done();
 
   std::uint64_t dropped() const { return dropped_; }
   std::size_t queued_data_bytes() const { return data_bytes_; }
-  bool idle() const { return !writing_ && waiting_.empty(); }
-  bool closing() const { return closing_; }
   std::size_t max_queued_bytes() const { return max_queued_bytes_; }
 
  private:
@@ -76,8 +71,6 @@ class Outbox {
   std::size_t statuses_ = 0;
   std::uint64_t dropped_ = 0;
   bool writing_ = false;
-  bool closing_ = false;
-  bool closed_ = false;  // the close was handed out
 };
 
 // What a client publishes, answered: who may, on which topic, and the command it carries. The
