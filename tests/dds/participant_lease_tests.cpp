@@ -124,11 +124,12 @@ TEST(ParticipantLease, ValvectlAnnouncesThirtySecondsOrTenMoreThanItsRunMayLast)
   const auto listing = valvectl_lease({"--timeout", "20", "list"});
   ASSERT_TRUE(listing) << "valvectl's participant was not met";
   EXPECT_EQ(listing->seconds, 30);
-  // --timeout 30 to find the valve and its first status, then up to 60 s for the final one.
+  // --timeout 30 each to find the valve, for its gateway's reader, for the first status and for
+  // the readers' acknowledgements, then up to 60 s for the final one: 180 s, and 10 more.
   const auto waiting = valvectl_lease(
       {"--timeout", "30", "move", "TJV000001", "--to", "10", "--wait", "--wait-timeout", "60"});
   ASSERT_TRUE(waiting) << "valvectl's participant was not met";
-  EXPECT_EQ(waiting->seconds, 100);
+  EXPECT_EQ(waiting->seconds, 190);
 }
 
 }  // namespace

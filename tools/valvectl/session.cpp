@@ -45,7 +45,10 @@ constexpr milliseconds kWatchFirstFrame{2000};
 // The lease valvectl announces: longer than the run, so that the gateways and the other
 // clients never check it before it leaves (Fast DDS 2.9.1 may abort a peer that removes a
 // leaving participant while checking its lease; docs/topics.md, "Short-lived participants"):
-// at least 30 s, and 10 s more than a run may wait in all (watch and its Ctrl-C excepted).
+// at least 30 s, and 10 s more than a run may wait in all, which every wait is held to (watch
+// and its Ctrl-C excepted: a watch is a long-lived participant). A command may wait --timeout
+// for its valves, for their gateways' readers, for its first statuses and for its readers'
+// acknowledgements, then --wait-timeout for its final statuses; a layout change three times.
 // valvectl's fail-safe does not rest on it: a run that is killed leaves no valve running for
 // long (moves and jogs end by themselves; `manual` exits once the valve runs, as it would in
 // order), and its command writer's liveliness (2 s) reports it when it is the only commander.
@@ -54,6 +57,10 @@ constexpr std::chrono::seconds kLeaseBeyondTheRun{10};
 
 std::chrono::seconds lease_for(const Invocation& invocation) {
   std::chrono::milliseconds longest = invocation.global.timeout;
+  if (invocation.subcommand == Subcommand::kCommand ||
+      invocation.subcommand == Subcommand::kLayoutChange) {
+    longest = 4 * invocation.global.timeout;
+  }
   if (invocation.subcommand == Subcommand::kCommand && invocation.command.wait) {
     longest += invocation.command.wait_timeout;
   }
@@ -125,7 +132,13 @@ class Session {
   }
 
   void complain(const std::string& message) {
-    terminal_.err << "valvectl: " << message << '\n' << std::flush;
+    terminal_.err << "valvectl: " << message;
+    if (Clock::now() >= run_ends_) {
+      terminal_.err << " (its whole run is held to "
+                    << seconds_text(std::chrono::duration_cast<milliseconds>(run_ends_ - started_))
+                    << ", within the lease it announced)";
+    }
+    terminal_.err << '\n' << std::flush;
   }
 
   std::string domain_text() const { return "domain " + std::to_string(invocation_.global.domain); }
@@ -186,7 +199,10 @@ class Session {
     }
   }
 
-  Deadline after_timeout() const { return Clock::now() + invocation_.global.timeout; }
+  // Every wait ends by the end of the run the lease covers.
+  Deadline within_run(Deadline until) const { return std::min(until, run_ends_); }
+  Deadline after(milliseconds wait) const { return within_run(Clock::now() + wait); }
+  Deadline after_timeout() const { return after(invocation_.global.timeout); }
 
   bool discover_directory(Deadline until) {
     return wait_until([](const ValveTable& table) { return table.directory_complete(); }, until);
@@ -207,7 +223,7 @@ class Session {
       // Telemetry is durable too and follows presence closely; do not print a row of dashes
       // for a valve whose values are on their way.
       wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
-                 std::min(until, Deadline(Clock::now() + kTelemetryGrace)));
+                 std::min(until, after(kTelemetryGrace)));
     }
     const ValveTable table = view_->snapshot();
     if (table.empty()) {
@@ -228,7 +244,7 @@ class Session {
     discover_directory(after_timeout());
     if (terminal_.interrupted) return kExitInterrupted;
     wait_until([](const ValveTable& table) { return table.telemetry_complete(); },
-               Deadline(Clock::now() + kTelemetryGrace));
+               after(kTelemetryGrace));
     const ValveTable table = view_->snapshot();
     if (table.empty()) {
       complain(no_gateway_text(table));
@@ -467,7 +483,7 @@ class Session {
       complain("could not write the command for " + codec::format_serial(serial));
       return kExitFailure;
     }
-    const Deadline until = Clock::now() + kJogTimeout;
+    const Deadline until = after(kJogTimeout);
     while (true) {
       const auto status = client.next_status(*id, until);
       if (!status) {
@@ -597,7 +613,7 @@ class Session {
     // Exiting deletes the writer, and with it the commands a late reader has yet to repair.
     // Asked-for readers (a recorder that must hold every command) get the whole --timeout.
     const bool readers_asked = invocation_.global.command_readers > 0;
-    if (!client.delivered(readers_asked ? after_timeout() : Clock::now() + kDeliveryWait) &&
+    if (!client.delivered(readers_asked ? after_timeout() : after(kDeliveryWait)) &&
         readers_asked) {
       complain("a command reader did not acknowledge the command(s) within " +
                seconds_text(invocation_.global.timeout) + "; it may not hold them");
@@ -635,7 +651,7 @@ class Session {
     if (first->state() == COMMAND_REJECTED) return kExitRejected;
     if (!request.wait) return exit_code_of(first->state());
 
-    const Deadline until = Clock::now() + request.wait_timeout;
+    const Deadline until = after(request.wait_timeout);
     std::optional<double> shown_position;
     CommandStatus latest = *first;
     while (latest.state() == COMMAND_ACCEPTED) {
@@ -696,16 +712,22 @@ class Session {
       const auto reply = table.reply(serial, *name);
       return reply && reply->received_ns >= accepted_ns;
     };
-    if (!wait_until(fresh, Clock::now() + kReplyGrace)) return;
+    if (!wait_until(fresh, after(kReplyGrace))) return;
     const Reply reply = *view_->snapshot().reply(serial, *name);
     emit(reply_text(serial, reply), reply_json(serial, reply));
   }
 
   Session(const Invocation& invocation, const Terminal& terminal)
-      : invocation_(invocation), terminal_(terminal) {}
+      : invocation_(invocation),
+        terminal_(terminal),
+        run_ends_(invocation.subcommand == Subcommand::kWatch
+                      ? Deadline::max()
+                      : started_ + lease_for(invocation) - kLeaseBeyondTheRun) {}
 
   const Invocation& invocation_;
   const Terminal& terminal_;
+  const Deadline started_ = Clock::now();
+  const Deadline run_ends_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<ValveView> view_;  // destroyed before the participant: its readers go first
   dds::TcpRejoin rejoin_;
