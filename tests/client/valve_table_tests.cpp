@@ -244,5 +244,64 @@ TEST(ValvectlTable, ANameTwoGatewaysClaimIsTwoPlaces) {
   EXPECT_TRUE(table.locations_named("section-0").empty());
 }
 
+std::vector<std::uint32_t> serials(const std::vector<ValveRow>& rows) {
+  std::vector<std::uint32_t> out;
+  for (const ValveRow& row : rows) out.push_back(row.serial);
+  return out;
+}
+
+// What a dashboard sends on each tick: the rows whose shown content changed, not those whose
+// presence or reply only came again (every second, or every poll).
+TEST(ValvectlTable, OnlyRowsWhoseShownContentChangedAreListedAsChanged) {
+  ValveTable table = two_gateways(2, 1);
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  table.on_presence(presence(2, true, "a"), "01.0f.aa");
+  table.on_presence(presence(3, true, "b"), "01.0f.bb");
+  table.on_telemetry(1, codec::Position{10.0}, 100);
+  EXPECT_EQ(serials(table.rows_changed_since(0)), (std::vector<std::uint32_t>{1, 2, 3}));
+
+  std::uint64_t sent = table.revision();
+  EXPECT_TRUE(table.rows_changed_since(sent).empty());
+  ValvePresence again = presence(2, true, "a");
+  again.last_seen_ns(5'000'000'000);
+  table.on_presence(again, "01.0f.aa");
+  table.on_telemetry(1, codec::Position{10.0}, 200);
+  EXPECT_TRUE(table.rows_changed_since(sent).empty());
+  EXPECT_EQ(table.row(1)->reply("position")->received_ns, 200u);
+
+  table.on_telemetry(1, codec::Position{12.5}, 300);
+  table.on_presence(presence(3, false, "b"), "01.0f.bb");
+  table.on_error(2, ERROR_HIGH_CURRENT);
+  EXPECT_EQ(serials(table.rows_changed_since(sent)), (std::vector<std::uint32_t>{1, 2, 3}));
+
+  sent = table.revision();
+  table.on_error(2, ERROR_HIGH_CURRENT);          // latched already
+  table.on_error_cleared(1, ERROR_HIGH_CURRENT);  // never set
+  EXPECT_TRUE(table.rows_changed_since(sent).empty());
+  table.on_error_cleared(2, ERROR_HIGH_CURRENT);
+  EXPECT_EQ(serials(table.rows_changed_since(sent)), (std::vector<std::uint32_t>{2}));
+
+  // A gateway lost (or back) changes what every row of it shows: all are listed.
+  sent = table.revision();
+  table.on_participant_liveliness("01.0f.bb", false);
+  const auto changed = table.rows_changed_since(sent);
+  EXPECT_EQ(serials(changed), (std::vector<std::uint32_t>{1, 2, 3}));
+  EXPECT_TRUE(changed[2].gateway_lost);
+  sent = table.revision();
+  table.on_participant_liveliness("01.0f.bb", false);  // already lost
+  EXPECT_TRUE(table.rows_changed_since(sent).empty());
+}
+
+// With two reporters the newest report may change which gateway a row names.
+TEST(ValvectlTable, APresenceFromASecondReporterIsAChangeEvenWhenAlike) {
+  ValveTable table = two_gateways(1, 1);
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  table.on_presence(presence(1, true, "b"), "01.0f.bb");
+  const std::uint64_t sent = table.revision();
+  table.on_presence(presence(1, true, "a"), "01.0f.aa");
+  ASSERT_EQ(table.rows_changed_since(sent).size(), 1u);
+  EXPECT_EQ(table.rows_changed_since(sent)[0].gateway, "a");
+}
+
 }  // namespace
 }  // namespace teejet::client

@@ -173,6 +173,33 @@ TEST(WebUpdates, ANewValveAGatewayChangeAndATargetAppearInTheNextTick) {
   EXPECT_EQ((*update)["gateways"][0]["gateway"], "bench");
 }
 
+// The server's tick builds JSON only for the rows changed since the last tick and those whose
+// target changed: the page gets what a frame of every valve would have sent it.
+TEST(WebUpdates, AFrameOfTheChangedAndRetargetedRowsSendsWhatAFrameOfEveryRowWould) {
+  client::ValveTable table = three_valves();
+  table.on_telemetry(1, codec::Position{5.0}, 1);
+  UpdateBatcher every, changed;
+  every.snapshot(dashboard_frame(table, {}));
+  changed.snapshot(dashboard_frame(table, {}));
+  const std::uint64_t sent = table.revision();
+  table.on_telemetry(2, codec::Position{33.0}, 5);
+  table.on_telemetry(1, codec::Position{5.0}, 6);  // the same again
+  const Targets targets{{3, 45.0}};
+  const auto also = retargeted({}, targets);
+  EXPECT_EQ(also, (std::set<std::uint32_t>{3}));
+  const auto rows = table.rows_changed_since(sent, also);
+  ASSERT_EQ(rows.size(), 2u);
+  const auto update = changed.tick(dashboard_frame(rows, table.gateways(), {}, targets), 40);
+  ASSERT_TRUE(update);
+  EXPECT_EQ(*update, every.tick(dashboard_frame(table, targets), 40));
+  ASSERT_EQ((*update)["valves"].size(), 2u);
+  EXPECT_EQ((*update)["valves"][0]["position"], 33.0);
+  EXPECT_EQ((*update)["valves"][1]["target"], 45.0);
+  EXPECT_EQ(retargeted(targets, {}), (std::set<std::uint32_t>{3}));
+  EXPECT_EQ(retargeted(targets, {{3, 50.0}}), (std::set<std::uint32_t>{3}));
+  EXPECT_TRUE(retargeted(targets, targets).empty());
+}
+
 TEST(WebUpdates, EveryStatusSinceTheLastTickIsSentOnceInOrder) {
   client::ValveTable table = three_valves();
   UpdateBatcher batcher;

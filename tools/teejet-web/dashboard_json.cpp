@@ -53,17 +53,36 @@ nlohmann::json gateway_json(const client::GatewaySummary& gateway) {
 }
 
 DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets) {
+  return dashboard_frame(table.rows(), table.gateways(), table.locations(), targets);
+}
+
+DashboardFrame dashboard_frame(const std::vector<client::ValveRow>& rows,
+                               const std::vector<client::GatewaySummary>& gateways,
+                               const std::vector<client::LocationRow>& places,
+                               const Targets& targets) {
   DashboardFrame frame;
-  for (const client::ValveRow& row : table.rows()) {
+  for (const client::ValveRow& row : rows) {
     frame.valves.emplace_back(row.serial, valve_json(row, targets));
   }
-  for (const client::GatewaySummary& gateway : table.gateways()) {
+  for (const client::GatewaySummary& gateway : gateways) {
     frame.gateways.emplace_back(gateway.name, gateway_json(gateway));
   }
-  for (const client::LocationRow& place : table.locations()) {
+  for (const client::LocationRow& place : places) {
     frame.places.emplace_back(place.gateway + "/" + place.name, client::to_json(place));
   }
   return frame;
+}
+
+std::set<std::uint32_t> retargeted(const Targets& before, const Targets& now) {
+  std::set<std::uint32_t> serials;
+  for (const auto& [serial, degrees] : now) {
+    const auto it = before.find(serial);
+    if (it == before.end() || it->second != degrees) serials.insert(serial);
+  }
+  for (const auto& [serial, degrees] : before) {
+    if (!now.contains(serial)) serials.insert(serial);
+  }
+  return serials;
 }
 
 nlohmann::json UpdateBatcher::snapshot(const DashboardFrame& frame) {

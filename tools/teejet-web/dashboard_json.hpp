@@ -9,6 +9,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -30,8 +31,10 @@ nlohmann::json valves_json(const client::ValveTable& table, const Targets& targe
 //  "valves_online":4,"valves_known":4}
 nlohmann::json gateway_json(const client::GatewaySummary& gateway);
 
-// Every valve's and gateway's JSON at one instant, in the table's order: made once per tick and
-// compared by each page's batcher, so that more pages do not mean more JSON to build.
+// Valves' and every gateway's and place's JSON at one instant, in the table's order: made once
+// per tick and compared by each page's batcher, so that more pages do not mean more JSON to
+// build. A page's first frame holds every valve; a tick's only those that changed since the last
+// tick (client::ValveView::changes_since) or whose target did.
 struct DashboardFrame {
   std::vector<std::pair<std::uint32_t, nlohmann::json>> valves;
   std::vector<std::pair<std::string, nlohmann::json>> gateways;
@@ -40,6 +43,12 @@ struct DashboardFrame {
   std::vector<std::pair<std::string, nlohmann::json>> places;
 };
 DashboardFrame dashboard_frame(const client::ValveTable& table, const Targets& targets);
+DashboardFrame dashboard_frame(const std::vector<client::ValveRow>& rows,
+                               const std::vector<client::GatewaySummary>& gateways,
+                               const std::vector<client::LocationRow>& places,
+                               const Targets& targets);
+// The serials whose target is new, changed or gone between `before` and `now`.
+std::set<std::uint32_t> retargeted(const Targets& before, const Targets& now);
 
 // Collects what changed between ticks and makes one message of it, so that the page gets 20-30
 // messages a second however many samples arrive. A tick compares each valve's and gateway's JSON

@@ -46,22 +46,44 @@ ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
 void ValveTable::on_presence(const ValvePresence& presence, const std::string& participant) {
   const std::string key =
       participant.empty() ? "gateway " + presence.gateway().to_string() : participant;
-  entry(presence.serial()).reports[key] = Report{presence, participant, ++reports_};
+  Entry& found = entry(presence.serial());
+  Report& report = found.reports[key];
+  // A valve's presence comes again every second with only its last-seen time new. With a
+  // second reporter the newest report may change which one is shown.
+  const bool shown_alike = report.order != 0 && found.reports.size() == 1 &&
+                           report.presence.address() == presence.address() &&
+                           report.presence.online() == presence.online() &&
+                           report.presence.boot_mode() == presence.boot_mode() &&
+                           report.presence.gateway() == presence.gateway() &&
+                           report.presence.location() == presence.location();
+  report = Report{presence, participant, ++reports_};
+  if (!shown_alike) changed(found);
 }
 
 void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                               std::uint64_t received_ns) {
   const auto subject = codec::subject(message);
   if (subject.empty()) return;  // not a reply: errors and I'm Here have their own ways
-  entry(serial).row.telemetry.insert_or_assign(std::string(subject), Reply{received_ns, message});
+  Entry& found = entry(serial);
+  auto& telemetry = found.row.telemetry;
+  if (const auto it = telemetry.find(subject); it != telemetry.end()) {
+    const bool alike = it->second.message == message;
+    it->second = Reply{received_ns, message};
+    if (!alike) changed(found);
+    return;
+  }
+  telemetry.emplace(std::string(subject), Reply{received_ns, message});
+  changed(found);
 }
 
 void ValveTable::on_error(std::uint32_t serial, ErrorKind kind) {
-  entry(serial).row.errors.insert(kind);
+  Entry& found = entry(serial);
+  if (found.row.errors.insert(kind).second) changed(found);
 }
 
 void ValveTable::on_error_cleared(std::uint32_t serial, ErrorKind kind) {
-  entry(serial).row.errors.erase(kind);
+  Entry& found = entry(serial);
+  if (found.row.errors.erase(kind) > 0) changed(found);
 }
 
 void ValveTable::on_gateway_status(const GatewayStatus& status, const std::string& participant) {
@@ -90,11 +112,9 @@ void ValveTable::on_gateway_status(const GatewayStatus& status, const std::strin
 }
 
 void ValveTable::on_participant_liveliness(const std::string& participant, bool alive) {
-  if (alive) {
-    lost_participants_.erase(participant);
-  } else {
-    lost_participants_.insert(participant);
-  }
+  const bool news = alive ? lost_participants_.erase(participant) > 0
+                          : lost_participants_.insert(participant).second;
+  if (news) every_row_changed_ = ++revision_;
 }
 
 void ValveTable::on_location(const ValveLocation& location, const std::string& participant) {
@@ -171,6 +191,17 @@ std::vector<ValveRow> ValveTable::rows() const {
   std::vector<ValveRow> out;
   for (const auto& [serial, found] : rows_) {
     if (!found.reports.empty()) out.push_back(shown(found));
+  }
+  return out;
+}
+
+std::vector<ValveRow> ValveTable::rows_changed_since(std::uint64_t revision,
+                                                     const std::set<std::uint32_t>& also) const {
+  std::vector<ValveRow> out;
+  const bool every = every_row_changed_ > revision;
+  for (const auto& [serial, found] : rows_) {
+    if (found.reports.empty()) continue;
+    if (every || found.revision > revision || also.contains(serial)) out.push_back(shown(found));
   }
   return out;
 }

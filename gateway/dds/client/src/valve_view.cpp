@@ -170,6 +170,13 @@ ValveTable ValveView::snapshot() const {
   return table_;
 }
 
+ValveView::Changes ValveView::changes_since(std::uint64_t revision,
+                                            const std::set<std::uint32_t>& also) const {
+  std::lock_guard lock(mutex_);
+  return {table_.rows_changed_since(revision, also), table_.gateways(), table_.locations(),
+          table_.revision()};
+}
+
 void ValveView::update_gateways_matched() const {
   eprosima::fastdds::dds::SubscriptionMatchedStatus matched;
   if (gateway_status_reader_->get_subscription_matched_status(matched) != ReturnCode::RETCODE_OK) {

@@ -130,6 +130,14 @@ class ValveTable {
   std::optional<Reply> reply(std::uint32_t serial, std::string_view subject) const;
   std::size_t online_count() const;  // online and with a gateway alive
 
+  // Grows whenever what a row shows changes (when a reply was received aside): a dashboard
+  // sends on the rows changed since the revision it last sent instead of comparing every row.
+  std::uint64_t revision() const { return revision_; }
+  // The rows (with a presence) that changed after `revision`, every one when a gateway was lost
+  // or came back since, and those of `also` whatever their revision; by serial.
+  std::vector<ValveRow> rows_changed_since(std::uint64_t revision,
+                                           const std::set<std::uint32_t>& also = {}) const;
+
   // How many gateways discovery has found so far (writers of gateway status matched).
   void set_gateways_matched(std::size_t count) { gateways_matched_ = count; }
   std::size_t gateways_matched() const { return gateways_matched_; }
@@ -174,8 +182,10 @@ class ValveTable {
   struct Entry {
     ValveRow row;                           // telemetry and errors; the rest comes from reports
     std::map<std::string, Report> reports;  // by participant (by gateway name when unknown)
+    std::uint64_t revision = 0;             // when what it shows last changed
   };
   Entry& entry(std::uint32_t serial);
+  void changed(Entry& entry) { entry.revision = ++revision_; }
   bool lost(const std::string& participant) const;  // its writers lapsed or left
   // The row as shown: from the latest report of a live gateway that says online, else from the
   // latest report; gateway_lost and also_reported_by filled in.
@@ -190,6 +200,8 @@ class ValveTable {
   std::size_t participants_met_ = 0;
   bool discovery_settled_ = true;
   std::set<std::string> lost_participants_;
+  std::uint64_t revision_ = 0;
+  std::uint64_t every_row_changed_ = 0;  // the revision of the last change of lost_participants_
 };
 
 }  // namespace teejet::client

@@ -15,6 +15,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -37,6 +38,17 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   ValveView& operator=(const ValveView&) = delete;
 
   ValveTable snapshot() const;
+
+  // What a dashboard's tick sends on, without copying the table: the rows changed after
+  // `revision` (ValveTable::rows_changed_since) and those of `also` whatever their revision,
+  // every gateway and place, and the revision all this is as of.
+  struct Changes {
+    std::vector<ValveRow> rows;
+    std::vector<GatewaySummary> gateways;
+    std::vector<LocationRow> places;
+    std::uint64_t revision = 0;
+  };
+  Changes changes_since(std::uint64_t revision, const std::set<std::uint32_t>& also = {}) const;
 
   // Waits until `condition` holds (true), or `until` passes or `interrupted` is set (false).
   // The condition runs with the table locked and must not call the view.
