@@ -123,7 +123,7 @@ Result<std::set<std::string>> live_gateways(dds::Participant& participant,
       },
       std::chrono::steady_clock::now() + kLiveGatewayLookup, stop);
   std::set<std::string> names;
-  for (const auto& gateway : (*view)->snapshot().gateways()) {
+  for (const auto& gateway : (*view)->gateways()) {
     if (!gateway.lost) names.insert(gateway.name);
   }
   return names;

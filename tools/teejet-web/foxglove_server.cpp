@@ -517,7 +517,7 @@ void FoxgloveServer::Impl::send_state(Connection& connection,
 
 void FoxgloveServer::Impl::forget_lost_gateways() {
   std::set<std::string> lost;
-  for (const client::GatewaySummary& gateway : view.snapshot().gateways()) {
+  for (const client::GatewaySummary& gateway : view.gateways()) {
     if (gateway.lost) lost.insert(gateway.participants.begin(), gateway.participants.end());
   }
   // Each participant once, when it is first lost: a dead gateway stays lost for good, and

@@ -131,7 +131,7 @@ Result<client::CommandClient*> DdsSender::connected() {
   view_.wait_until([](const client::ValveTable& table) { return !table.gateways().empty(); }, until,
                    never);
   std::set<std::string> gateways;
-  for (const auto& gateway : view_.snapshot().gateways()) {
+  for (const auto& gateway : view_.gateways()) {
     gateways.insert(gateway.participants.begin(), gateway.participants.end());
   }
   if (gateways.empty()) return Error{ErrorCode::kInvalidValue, "no gateway found (waited 5 s)"};

@@ -110,7 +110,7 @@ class TypedReader final : public TopicReader {
       } else if (info.instance_state == NOT_ALIVE_NO_WRITERS_INSTANCE_STATE) {
         taken.writers_gone = true;
       } else {
-        continue;
+        continue;  // one writer of several left: nothing happened to the valve
       }
       out.push_back(std::move(taken));
     }

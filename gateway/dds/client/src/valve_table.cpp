@@ -47,10 +47,11 @@ void ValveTable::on_presence(const ValvePresence& presence, const std::string& p
   const std::string key =
       participant.empty() ? "gateway " + presence.gateway().to_string() : participant;
   Entry& found = entry(presence.serial());
-  Report& report = found.reports[key];
+  const auto [it, first] = found.reports.try_emplace(key);
+  Report& report = it->second;
   // A valve's presence comes again every second with only its last-seen time new. With a
   // second reporter the newest report may change which one is shown.
-  const bool shown_alike = report.order != 0 && found.reports.size() == 1 &&
+  const bool shown_alike = !first && found.reports.size() == 1 &&
                            report.presence.address() == presence.address() &&
                            report.presence.online() == presence.online() &&
                            report.presence.boot_mode() == presence.boot_mode() &&

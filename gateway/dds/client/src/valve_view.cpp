@@ -170,6 +170,11 @@ ValveTable ValveView::snapshot() const {
   return table_;
 }
 
+std::vector<GatewaySummary> ValveView::gateways() const {
+  std::lock_guard lock(mutex_);
+  return table_.gateways();
+}
+
 ValveView::Changes ValveView::changes_since(std::uint64_t revision,
                                             const std::set<std::uint32_t>& also) const {
   std::lock_guard lock(mutex_);

@@ -38,6 +38,8 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   ValveView& operator=(const ValveView&) = delete;
 
   ValveTable snapshot() const;
+  // The gateways alone (ValveTable::gateways), without copying every valve's row.
+  std::vector<GatewaySummary> gateways() const;
 
   // What a dashboard's tick sends on, without copying the table: the rows changed after
   // `revision` (ValveTable::rows_changed_since) and those of `also` whatever their revision,
