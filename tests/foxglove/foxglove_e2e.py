@@ -39,7 +39,6 @@ import subprocess
 import sys
 import tempfile
 import threading
-import time
 
 here = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(here, "..", "support"))
@@ -357,13 +356,17 @@ def raw_client(topic_prefix, receive_buffer=128 * 1024):
 class SlowReader(threading.Thread):
     """Reads 64 KiB a second, about two thirds of what a subscription to every valve topic of
     32 valves at the full poll brings: it falls behind for good. Whole segments, so that the
-    kernel's window reopens at once; the statuses found in what it read are kept."""
+    kernel's window reopens at once; the statuses found in what it read are kept. Once teejet-web
+    says it closed the connection, `drain` lets it read on at once to the close: what the
+    kernel still held for it (its send buffer grows to megabytes) would take the slow pace
+    longer than any deadline."""
 
     def __init__(self, client):
         super().__init__(daemon=True)
         self.client = client
         self.statuses = []
         self.closed = False
+        self.drain = threading.Event()
 
     def run(self):
         data = b""
@@ -373,7 +376,7 @@ class SlowReader(threading.Thread):
                 if not chunk:
                     break
                 data = self.frames(data + chunk)
-                time.sleep(1)
+                self.drain.wait(1)
         except OSError:
             pass
         self.closed = True
@@ -413,6 +416,10 @@ def case_slow(run):
     told = eventually(lambda: [s for s in slow.statuses if "messages for this connection" in s],
                       30, "a status telling the slow client of its dropped messages")[0]
     wait_for_line(run.path("web.err"), "falls behind", 30, web)
+    slow_port = slow.client.sock.getsockname()[1]
+    wait_for_line(run.path("web.err"), f"port {slow_port} has not caught up for 10 s: closed", 30,
+                  web)
+    slow.drain.set()
     eventually(lambda: slow.closed, 30, "the close of the client that does not catch up")
     closed = eventually(
         lambda: [line for line in open(run.path("web.err")) if "has not caught up" in line], 30,
