@@ -158,8 +158,10 @@ class Run:
         return [json.loads(line) for line in done.stdout.splitlines() if line.strip()], done
 
     def read_jsonl(self, name):
+        """Every complete line: a program still running may be halfway through writing the last
+        one (CI run 48 read a cut line of the live sample logger), which the next read gets."""
         with open(self.path(name)) as f:
-            return [json.loads(line) for line in f if line.strip()]
+            return [json.loads(line) for line in f if line.endswith("\n") and line.strip()]
 
 
 def normalise(value):
