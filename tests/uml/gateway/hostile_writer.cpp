@@ -13,6 +13,7 @@
 // Usage: hostile_writer DOMAIN SERIAL_1 SERIAL_2 UNKNOWN_SERIAL [FLOOD]
 // FLOOD: commands to valve 1, written 10,000 a second at most (default 10,000).
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -40,6 +41,14 @@ using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 const char* const kOrigin = "hostile-writer";
+
+// A wait of `seconds` times TEEJET_DEADLINE_SCALE (tests/uml/CMakeLists.txt): a deadline only
+// bounds how long a failure takes to show, and a loaded host slows UML several times over.
+std::chrono::steady_clock::time_point within(std::chrono::seconds seconds) {
+  const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
+  const long factor = scale != nullptr ? std::max(1L, std::strtol(scale, nullptr, 10)) : 1L;
+  return std::chrono::steady_clock::now() + seconds * factor;
+}
 
 // Every status, taken on Fast DDS's thread as it arrives: a reader that keeps up.
 class Statuses final : public eprosima::fastdds::dds::DataReaderListener {
@@ -220,7 +229,7 @@ int main(int argc, char** argv) {
   auto writer = p.writer(*command_topic, teejet::dds::topics::command_writer_qos());
   if (!reader || !writer) return 1;
   // Both halves matched before the first command: commands are VOLATILE.
-  const auto match_until = std::chrono::steady_clock::now() + 30s;
+  const auto match_until = within(30s);
   for (;;) {
     eprosima::fastdds::dds::PublicationMatchedStatus commands;
     eprosima::fastdds::dds::SubscriptionMatchedStatus status;
@@ -250,7 +259,7 @@ int main(int argc, char** argv) {
   // 1. Every hostile case, one at a time.
   for (const auto& hostile : hostile_cases(valve_1, unknown)) {
     const auto id = write(hostile.command);
-    const auto until = std::chrono::steady_clock::now() + 10s;
+    const auto until = within(10s);
     const bool runs_on = hostile.name == "milliseconds-65535";
     const auto got = id == 0   ? std::vector<CommandStatus>{}
                      : runs_on ? statuses.first(id, until)
@@ -284,14 +293,14 @@ int main(int argc, char** argv) {
   const std::uint32_t last_flood_id = next_id;
   const double flood_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - flood_start).count();
-  const auto moved = statuses.follow(valve_2_move, std::chrono::steady_clock::now() + 30s);
+  const auto moved = statuses.follow(valve_2_move, within(30s));
   const bool valve_2_done = moved.size() == 2 && moved[1].state() == COMMAND_COMPLETED;
   if (!valve_2_done) ++unexpected;
   std::printf("flood of %d written in %.2f s, %u refused by DDS; valve 2 moved amid it: %s\n",
               flood, flood_s, refused, valve_2_done ? "COMPLETED" : "NOT COMPLETED UNEXPECTED");
 
   // Every command written must have a final status (the flood's before the good moves).
-  const auto until = std::chrono::steady_clock::now() + 30s;
+  const auto until = within(30s);
   std::size_t missing = 0, flood_missing = 0;
   std::map<std::string, std::size_t> tally;
   std::map<std::uint32_t, std::size_t> run_frames;
@@ -315,7 +324,7 @@ int main(int argc, char** argv) {
   std::this_thread::sleep_for(300ms);  // the rate limit's refill, not a wait for an event
   for (const auto& [serial, degrees] : {std::pair{valve_1, 45.0f}, std::pair{valve_2, 20.0f}}) {
     const auto id = write(move_to(serial, degrees));
-    const auto got = statuses.follow(id, std::chrono::steady_clock::now() + 15s);
+    const auto got = statuses.follow(id, within(15s));
     const bool done = got.size() == 2 && got[1].state() == COMMAND_COMPLETED;
     if (!done) ++unexpected;
     if (!got.empty() && got.front().state() == COMMAND_ACCEPTED) ++run_frames[serial];
