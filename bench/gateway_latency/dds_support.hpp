@@ -3,7 +3,9 @@
 // DDS helpers every DDS mode uses: endpoints of the contract's topics made in one step, and
 // waiting for discovery with a deadline.
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <functional>
 
 #include "teejet/core/result.hpp"
@@ -14,7 +16,14 @@ namespace teejet::bench {
 
 namespace fdds = eprosima::fastdds::dds;
 
-inline constexpr std::chrono::seconds kDiscoveryTimeout{20};
+// 20 s, times TEEJET_DEADLINE_SCALE where that is set (the user-mode-linux tests set it:
+// tests/uml/CMakeLists.txt): a loaded host slows UML several times over.
+inline std::chrono::seconds scaled_discovery_timeout() {
+  const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
+  const long factor = scale != nullptr ? std::max(1L, std::strtol(scale, nullptr, 10)) : 1L;
+  return std::chrono::seconds{20} * factor;
+}
+inline const std::chrono::seconds kDiscoveryTimeout = scaled_discovery_timeout();
 
 // A reader (writer) of Sample's topic (dds::topics::topic_of), registering the topic on first use.
 template <class Sample>
