@@ -3,11 +3,10 @@
 // DDS helpers every DDS mode uses: endpoints of the contract's topics made in one step, and
 // waiting for discovery with a deadline.
 
-#include <algorithm>
 #include <chrono>
-#include <cstdlib>
 #include <functional>
 
+#include "support/eventually.hpp"
 #include "teejet/core/result.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
@@ -16,14 +15,8 @@ namespace teejet::bench {
 
 namespace fdds = eprosima::fastdds::dds;
 
-// 20 s, times TEEJET_DEADLINE_SCALE where that is set (the user-mode-linux tests set it:
-// tests/uml/CMakeLists.txt): a loaded host slows UML several times over.
-inline std::chrono::seconds scaled_discovery_timeout() {
-  const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
-  const long factor = scale != nullptr ? std::max(1L, std::strtol(scale, nullptr, 10)) : 1L;
-  return std::chrono::seconds{20} * factor;
-}
-inline const std::chrono::seconds kDiscoveryTimeout = scaled_discovery_timeout();
+// 20 s, scaled as every deadline of the user-mode-linux tests that run this bench is.
+inline const std::chrono::seconds kDiscoveryTimeout = testing::scaled(std::chrono::seconds{20});
 
 // A reader (writer) of Sample's topic (dds::topics::topic_of), registering the topic on first use.
 template <class Sample>

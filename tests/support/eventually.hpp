@@ -2,7 +2,9 @@
 
 // Waiting for something another thread or process does, without a fixed sleep.
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <functional>
 #include <thread>
 
@@ -17,6 +19,15 @@ inline bool eventually(const std::function<bool()>& condition, std::chrono::mill
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return condition();
+}
+
+// `deadline` times TEEJET_DEADLINE_SCALE where that is set (a whole number; the user-mode-linux
+// tests set it, tests/uml/CMakeLists.txt; tools/lib/eventually.sh reads the same): a deadline
+// only bounds how long a failure takes to show, and a loaded host slows UML several times over.
+template <class Rep, class Period>
+std::chrono::duration<Rep, Period> scaled(std::chrono::duration<Rep, Period> deadline) {
+  const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
+  return deadline * (scale != nullptr ? std::max(1L, std::strtol(scale, nullptr, 10)) : 1L);
 }
 
 }  // namespace teejet::testing

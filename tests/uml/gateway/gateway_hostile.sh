@@ -37,7 +37,7 @@ check "the gateway polls both valves" eventually 15 \
   bash -c "grep -q 18EFD8D5#11 '$work/wire.log' && grep -q 18EFD9D5#11 '$work/wire.log'"
 
 status=0
-timeout $((100 * ${TEEJET_DEADLINE_SCALE:-1})) "$writer" 9 1 2 99 "${HOSTILE_FLOOD:-3000}" >"$work/writer.out" 2>"$work/writer.err" || status=$?
+timeout "$(scaled_seconds 100)" "$writer" 9 1 2 99 "${HOSTILE_FLOOD:-3000}" >"$work/writer.out" 2>"$work/writer.err" || status=$?
 # Everything the gateway sent while the writer ran, and nothing of its shutdown.
 cp "$work/wire.log" "$work/wire.final"
 cat "$work/writer.out"

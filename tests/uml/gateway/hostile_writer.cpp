@@ -13,7 +13,6 @@
 // Usage: hostile_writer DOMAIN SERIAL_1 SERIAL_2 UNKNOWN_SERIAL [FLOOD]
 // FLOOD: commands to valve 1, written 10,000 a second at most (default 10,000).
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -27,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "support/eventually.hpp"
 #include "support/valve_commands.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
@@ -42,12 +42,9 @@ using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 const char* const kOrigin = "hostile-writer";
 
-// A wait of `seconds` times TEEJET_DEADLINE_SCALE (tests/uml/CMakeLists.txt): a deadline only
-// bounds how long a failure takes to show, and a loaded host slows UML several times over.
+// A deadline `seconds` from now, scaled as every UML test's is.
 std::chrono::steady_clock::time_point within(std::chrono::seconds seconds) {
-  const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
-  const long factor = scale != nullptr ? std::max(1L, std::strtol(scale, nullptr, 10)) : 1L;
-  return std::chrono::steady_clock::now() + seconds * factor;
+  return std::chrono::steady_clock::now() + teejet::testing::scaled(seconds);
 }
 
 // Every status, taken on Fast DDS's thread as it arrives: a reader that keeps up.
