@@ -6,7 +6,15 @@ Import it with the path computed from the script's own place, e.g. for tests/web
     sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
 """
 
+import os
 import time
+
+
+def scaled(seconds):
+    """`seconds` times TEEJET_DEADLINE_SCALE where that is set (a whole number; the user-mode-linux
+    tests and the sanitizer stages of tools/test set it; tests/support/eventually.hpp reads the
+    same): a deadline only bounds how long a failure takes to show."""
+    return seconds * max(1, int(os.environ.get("TEEJET_DEADLINE_SCALE") or 1))
 
 
 class Timeout(AssertionError):
@@ -14,12 +22,12 @@ class Timeout(AssertionError):
 
 
 def latest(probe, timeout, ok=bool, interval=0.05, alive=None):
-    """probe()'s first value that ok() accepts within `timeout` seconds, else the last value seen:
-    for callers whose own check judges and reports it.
+    """probe()'s first value that ok() accepts within `timeout` seconds (scaled()), else the last
+    value seen: for callers whose own check judges and reports it.
 
     The probe runs once more after the deadline passed. `alive`, if given, runs before each probe
     and raises when waiting is pointless (a process the condition depends on exited)."""
-    deadline = time.monotonic() + timeout
+    deadline = time.monotonic() + scaled(timeout)
     while True:
         if alive is not None:
             alive()
@@ -35,7 +43,7 @@ def eventually(probe, timeout, what, ok=bool, interval=0.05, alive=None):
     Raises Timeout naming `what` and the last value seen."""
     seen = latest(probe, timeout, ok, interval, alive)
     if not ok(seen):
-        raise Timeout(f"{what} not within {timeout:g} s; last seen: {seen!r}")
+        raise Timeout(f"{what} not within {scaled(timeout):g} s; last seen: {seen!r}")
     return seen
 
 
