@@ -60,6 +60,19 @@ class EcuReadingEverything {
     return gateway_counters_;
   }
 
+  // A mark, and the first gateway status heard after it: a window's rates come from two
+  // statuses the gateway wrote inside it, however late a loaded host delivers them (the last
+  // status before the window may be older than the window's own conditions).
+  std::size_t mark_gateway_status() {
+    std::lock_guard lock(mutex_);
+    first_status_after_.emplace_back();
+    return first_status_after_.size() - 1;
+  }
+  std::optional<GatewayCounters> first_gateway_status_after(std::size_t mark) const {
+    std::lock_guard lock(mutex_);
+    return first_status_after_.at(mark);
+  }
+
   // Commands as a commanding ECU writes them, with the statuses they got.
   Status open_commands() {
     auto writer = open_writer<ValveCommand>(*participant_, topics::command_writer_qos());
@@ -133,6 +146,7 @@ class EcuReadingEverything {
     if (status.origin().to_string() == kOrigin) ledger_.record(status);
   }};
   std::optional<GatewayCounters> gateway_counters_;
+  std::vector<std::optional<GatewayCounters>> first_status_after_;
   std::set<std::uint32_t> serials_seen_;
   OnSample<ValvePresence> presence_{[this](const ValvePresence& sample) {
     ++samples_;
@@ -142,6 +156,9 @@ class EcuReadingEverything {
   OnSample<GatewayStatus> gateway_status_{[this](const GatewayStatus& status) {
     std::lock_guard lock(mutex_);
     gateway_counters_ = GatewayCounters{status.frames_in(), status.frames_out(), status.stamp_ns()};
+    for (auto& first : first_status_after_) {
+      if (!first) first = gateway_counters_;
+    }
   }};
   std::vector<std::unique_ptr<fdds::DataReaderListener>> counters_;
   std::unique_ptr<dds::Participant> participant_;  // last: destroyed first, before the listeners
@@ -265,7 +282,7 @@ int run_resources(const Options& options) {
   std::optional<std::uint64_t> frames_before;
   if (!options.interface.empty()) frames_before = bus_frames(options.interface);
   const auto samples_before = ecu ? ecu->samples() : 0;
-  const auto gateway_before = ecu ? ecu->gateway_counters() : std::nullopt;
+  const std::size_t window_start_mark = ecu ? ecu->mark_gateway_status() : 0;
   const auto window_start = std::chrono::steady_clock::now();
 
   // The window is a measurement period, not a wait for anything; meanwhile commands go out at
@@ -307,6 +324,8 @@ int run_resources(const Options& options) {
 
   const double window =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - window_start).count();
+  const std::size_t window_end_mark = ecu ? ecu->mark_gateway_status() : 0;
+  const auto samples_after = ecu ? ecu->samples() : 0;
   const double ticks_per_second = static_cast<double>(::sysconf(_SC_CLK_TCK));
   for (const auto& start : starts) {
     const auto ticks = cpu_ticks(start.pid);
@@ -352,8 +371,16 @@ int run_resources(const Options& options) {
   }
   if (ecu) {
     std::printf("SUBSCRIBER label=%s samples_per_s=%.1f valves_seen=%zu", options.label.c_str(),
-                static_cast<double>(ecu->samples() - samples_before) / window, ecu->valves_seen());
-    const auto gateway_after = ecu->gateway_counters();
+                static_cast<double>(samples_after - samples_before) / window, ecu->valves_seen());
+    // The gateway writes its status every second: the first one after the window closes the
+    // span its counters are compared over.
+    if (!wait_until([&] { return ecu->first_gateway_status_after(window_end_mark).has_value(); },
+                    kDiscoveryTimeout)) {
+      std::fprintf(stderr, "gateway_latency: %s: no gateway status within %lld s of the window\n",
+                   options.label.c_str(), static_cast<long long>(kDiscoveryTimeout.count()));
+    }
+    const auto gateway_before = ecu->first_gateway_status_after(window_start_mark);
+    const auto gateway_after = ecu->first_gateway_status_after(window_end_mark);
     if (gateway_before && gateway_after && gateway_after->stamp_ns > gateway_before->stamp_ns) {
       const double seconds =
           static_cast<double>(gateway_after->stamp_ns - gateway_before->stamp_ns) / 1e9;
