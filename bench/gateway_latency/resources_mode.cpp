@@ -29,6 +29,7 @@ namespace topics = dds::topics;
 
 // The gateway's own counters, from one GatewayStatus sample.
 struct GatewayCounters {
+  std::string gateway;
   std::uint64_t frames_in = 0;
   std::uint64_t frames_out = 0;
   std::uint64_t stamp_ns = 0;
@@ -60,17 +61,18 @@ class EcuReadingEverything {
     return gateway_counters_;
   }
 
-  // A mark, and the first gateway status heard after it: a window's rates come from two
-  // statuses the gateway wrote inside it, however late a loaded host delivers them (the last
-  // status before the window may be older than the window's own conditions).
-  std::size_t mark_gateway_status() {
+  // A mark, and the first status heard after it from `gateway` (any gateway when empty): a
+  // window's rates come from two statuses one gateway wrote inside it, however late a loaded
+  // host delivers them (the last status before the window may be older than the window's own
+  // conditions, and with several gateways another gateway's).
+  std::size_t mark_gateway_status(std::string gateway = {}) {
     std::lock_guard lock(mutex_);
-    first_status_after_.emplace_back();
+    first_status_after_.push_back({std::move(gateway), std::nullopt});
     return first_status_after_.size() - 1;
   }
   std::optional<GatewayCounters> first_gateway_status_after(std::size_t mark) const {
     std::lock_guard lock(mutex_);
-    return first_status_after_.at(mark);
+    return first_status_after_.at(mark).first;
   }
 
   // Commands as a commanding ECU writes them, with the statuses they got.
@@ -146,7 +148,11 @@ class EcuReadingEverything {
     if (status.origin().to_string() == kOrigin) ledger_.record(status);
   }};
   std::optional<GatewayCounters> gateway_counters_;
-  std::vector<std::optional<GatewayCounters>> first_status_after_;
+  struct StatusAfterMark {
+    std::string from;  // empty: any gateway
+    std::optional<GatewayCounters> first;
+  };
+  std::vector<StatusAfterMark> first_status_after_;
   std::set<std::uint32_t> serials_seen_;
   OnSample<ValvePresence> presence_{[this](const ValvePresence& sample) {
     ++samples_;
@@ -155,9 +161,12 @@ class EcuReadingEverything {
   }};
   OnSample<GatewayStatus> gateway_status_{[this](const GatewayStatus& status) {
     std::lock_guard lock(mutex_);
-    gateway_counters_ = GatewayCounters{status.frames_in(), status.frames_out(), status.stamp_ns()};
-    for (auto& first : first_status_after_) {
-      if (!first) first = gateway_counters_;
+    gateway_counters_ = GatewayCounters{status.gateway().to_string(), status.frames_in(),
+                                        status.frames_out(), status.stamp_ns()};
+    for (auto& mark : first_status_after_) {
+      if (!mark.first && (mark.from.empty() || mark.from == gateway_counters_->gateway)) {
+        mark.first = gateway_counters_;
+      }
     }
   }};
   std::vector<std::unique_ptr<fdds::DataReaderListener>> counters_;
@@ -324,7 +333,14 @@ int run_resources(const Options& options) {
 
   const double window =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - window_start).count();
-  const std::size_t window_end_mark = ecu ? ecu->mark_gateway_status() : 0;
+  // The end mark is set as the window closes when the gateway was heard inside it, else once
+  // it is heard (below): then the span runs past the window, under the same conditions.
+  std::optional<GatewayCounters> gateway_before;
+  std::optional<std::size_t> window_end_mark;
+  if (ecu) {
+    gateway_before = ecu->first_gateway_status_after(window_start_mark);
+    if (gateway_before) window_end_mark = ecu->mark_gateway_status(gateway_before->gateway);
+  }
   const auto samples_after = ecu ? ecu->samples() : 0;
   const double ticks_per_second = static_cast<double>(::sysconf(_SC_CLK_TCK));
   for (const auto& start : starts) {
@@ -372,16 +388,25 @@ int run_resources(const Options& options) {
   if (ecu) {
     std::printf("SUBSCRIBER label=%s samples_per_s=%.1f valves_seen=%zu", options.label.c_str(),
                 static_cast<double>(samples_after - samples_before) / window, ecu->valves_seen());
-    // The gateway writes its status every second: the first one after the window closes the
+    // The gateway writes its status every second: the first one after the end mark closes the
     // span its counters are compared over.
-    if (!wait_until([&] { return ecu->first_gateway_status_after(window_end_mark).has_value(); },
-                    kDiscoveryTimeout)) {
-      std::fprintf(stderr, "gateway_latency: %s: no gateway status within %lld s of the window\n",
+    const auto heard = [&](std::size_t mark) {
+      return wait_until([&] { return ecu->first_gateway_status_after(mark).has_value(); },
+                        kDiscoveryTimeout);
+    };
+    if (!window_end_mark && heard(window_start_mark)) {
+      gateway_before = ecu->first_gateway_status_after(window_start_mark);
+      window_end_mark = ecu->mark_gateway_status(gateway_before->gateway);
+    }
+    if (!window_end_mark || !heard(*window_end_mark)) {
+      std::fprintf(stderr,
+                   "gateway_latency: %s: no two gateway statuses within %lld s of the window\n",
                    options.label.c_str(), static_cast<long long>(kDiscoveryTimeout.count()));
     }
-    const auto gateway_before = ecu->first_gateway_status_after(window_start_mark);
-    const auto gateway_after = ecu->first_gateway_status_after(window_end_mark);
-    if (gateway_before && gateway_after && gateway_after->stamp_ns > gateway_before->stamp_ns) {
+    const auto gateway_after =
+        window_end_mark ? ecu->first_gateway_status_after(*window_end_mark) : std::nullopt;
+    if (gateway_before && gateway_after && gateway_after->gateway == gateway_before->gateway &&
+        gateway_after->stamp_ns > gateway_before->stamp_ns) {
       const double seconds =
           static_cast<double>(gateway_after->stamp_ns - gateway_before->stamp_ns) / 1e9;
       std::printf(

@@ -12,8 +12,9 @@ namespace teejet::testing {
 
 // `deadline` times TEEJET_DEADLINE_SCALE where that is set (a whole number; tools/test sets it
 // for every test, the user-mode-linux tests through their own cache variable;
-// tests/support/waiting.py and tools/lib/eventually.sh read the same): a deadline only bounds how long a failure takes to
-// show, and a loaded host slows UML and a sanitizer build several times over.
+// tests/support/waiting.py and tools/lib/eventually.sh read the same): a deadline only bounds how
+// long a failure takes to show, and a loaded host slows UML and a sanitizer build several times
+// over.
 template <class Rep, class Period>
 std::chrono::duration<Rep, Period> scaled(std::chrono::duration<Rep, Period> deadline) {
   const char* scale = std::getenv("TEEJET_DEADLINE_SCALE");
