@@ -41,7 +41,8 @@
 //   {"event":"subscribe","subscriptions":[{id,channel,topic}]}
 //   {"event":"unsubscribe","subscriptions":[id,...]}
 //   {"event":"message","topic","channel","subscription","timestamp","data"}
-//                                 ("unsubscribed":true when it came after the unsubscribe)
+//                                 ("unsubscribed":true when it came after the unsubscribe,
+//                                  "ms_after_unsubscribe": how long after it was sent)
 //   {"event":"clientAdvertise","channel","topic","encoding","schemaName"}
 //   {"event":"published","topic","channel","data"}  data with every field, defaults filled
 //   {"event":"warning","message"}                   e.g. the server lacks clientPublish
@@ -562,6 +563,7 @@ function run(args) {
         }
         state.subscribedChannels.clear();
         state.unsubscribedAll = true;
+        state.unsubscribedAt = performance.now();
         emit({ event: "unsubscribe", subscriptions: ids });
       });
     }
@@ -855,7 +857,12 @@ function run(args) {
         subscription: subscriptionId,
         timestamp: timestamp.toString(),
         data: plain(decoded),
-        ...(subscription.active ? {} : { unsubscribed: true }),
+        ...(subscription.active
+          ? {}
+          : {
+              unsubscribed: true,
+              ms_after_unsubscribe: Math.round(performance.now() - (state.unsubscribedAt ?? 0)),
+            }),
       });
     }
     checkDone();
