@@ -421,6 +421,7 @@ function run(args) {
     messages: 0,
     bytes: 0,
     afterUnsubscribe: 0,
+    unsubscribedAt: undefined, // performance.now() of the unsubscribe
     perTopic: new Map(),
     published: 0,
     publishesDone: args.publish.length === 0,
@@ -861,7 +862,7 @@ function run(args) {
           ? {}
           : {
               unsubscribed: true,
-              ms_after_unsubscribe: Math.round(performance.now() - (state.unsubscribedAt ?? 0)),
+              ms_after_unsubscribe: Math.round(performance.now() - state.unsubscribedAt),
             }),
       });
     }

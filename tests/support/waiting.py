@@ -13,7 +13,8 @@ import time
 def scaled(seconds):
     """`seconds` times TEEJET_DEADLINE_SCALE where that is set (a whole number; tools/test sets it
     for every test, the user-mode-linux tests through their own cache variable;
-    tests/support/eventually.hpp reads the same): a deadline only bounds how long a failure takes to show."""
+    tests/support/eventually.hpp reads the same): a deadline only bounds how long a failure
+    takes to show."""
     return seconds * max(1, int(os.environ.get("TEEJET_DEADLINE_SCALE") or 1))
 
 

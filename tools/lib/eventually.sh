@@ -4,7 +4,8 @@
 
 # scaled_seconds SECONDS: SECONDS times TEEJET_DEADLINE_SCALE where that is set (tools/test sets
 # it for every test, the user-mode-linux tests through tests/uml/CMakeLists.txt;
-# tests/support/eventually.hpp reads the same for C++): a deadline only bounds how long a failure takes to show.
+# tests/support/eventually.hpp reads the same for C++): a deadline only bounds how long a
+# failure takes to show.
 scaled_seconds() { echo $(($1 * ${TEEJET_DEADLINE_SCALE:-1})); }
 
 # eventually SECONDS COMMAND...: runs COMMAND until it succeeds (true) or SECONDS (scaled) pass
