@@ -33,7 +33,7 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "..", "support"))
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 from netlab import SKIP, Lab, LabUnavailable  # noqa: E402
-from waiting import first  # noqa: E402 (tests/support)
+from waiting import first, scaled  # noqa: E402 (tests/support)
 
 CONFIG = os.path.join(HERE, "..", "..", "config")
 SERIALS = ["TJV000001", "TJV000002", "TJV000003", "TJV000004"]
@@ -98,7 +98,8 @@ class Bench:
 
     def valvectl(self, host, bench_profile, *argv, timeout_s=None, env=None):
         """valvectl's result, from one start."""
-        timeout_s = timeout_s or self.timeout
+        # valvectl's own deadline is one of the test's: scaled like the others (waiting.scaled).
+        timeout_s = timeout_s or scaled(self.timeout)
         command = [self.args.valvectl, "--profile", bench_profile, "--json", "--timeout",
                    str(timeout_s), *argv]
         result = self.lab.run(host, command, timeout=timeout_s + 60, env=env)
