@@ -7,6 +7,7 @@
 #include <chrono>
 
 #include "support/dds_peer.hpp"
+#include "support/eventually.hpp"
 #include "support/test_domain.hpp"
 #include "support/valve_samples.hpp"
 #include "teejet/client/valve_view.hpp"
@@ -66,6 +67,65 @@ TEST(ValveView, AGatewayGoneBeforeItsFirstLivelinessReachedTheClientIsShownLost)
       std::chrono::steady_clock::now() + kDeadline, never))
       << "the row stayed online after its gateway's status writer went";
   EXPECT_EQ((*view)->snapshot().online_count(), 0u);
+}
+
+// A command's valvectl follows only the directory and the telemetry it shows: every topic it
+// leaves out is one sample per valve fewer that each gateway sends it as it joins.
+TEST(ValveView, AViewOfSomeTelemetryNeitherSubscribesToNorShowsTheRest) {
+  DdsPeer gateway(test_domain(), "gateway-by-hand");
+  const auto writer_of = [&gateway](auto identity) {
+    using Sample = typename decltype(identity)::type;
+    auto topic = dds::topics::topic_of<Sample>(gateway.participant());
+    EXPECT_TRUE(topic);
+    auto writer = gateway.participant().writer(*topic, dds::topics::state_writer_qos());
+    EXPECT_TRUE(writer);
+    return writer ? *writer : nullptr;
+  };
+  auto* presence_writer = writer_of(std::type_identity<ValvePresence>{});
+  auto* position_writer = writer_of(std::type_identity<ValvePosition>{});
+  auto* temperature_writer = writer_of(std::type_identity<ValveTemperature>{});
+  ASSERT_TRUE(presence_writer && position_writer && temperature_writer);
+  ValvePresence online = presence(0x0012'3456, true);
+  ValvePosition position;
+  position.serial(0x0012'3456);
+  position.degrees(42.5F);
+  ValveTemperature temperature;
+  temperature.serial(0x0012'3456);
+  temperature.valve_c(31);
+  ASSERT_TRUE(presence_writer->write(&online));
+  ASSERT_TRUE(position_writer->write(&position));
+  ASSERT_TRUE(temperature_writer->write(&temperature));
+
+  DdsPeer lean_client(test_domain(), "lean-client");
+  DdsPeer full_client(test_domain(), "full-client");
+  auto lean = ValveView::create(lean_client.participant(),
+                                {.everything = false, .telemetry = {"position"}});
+  ASSERT_TRUE(lean) << lean.error().reason;
+  auto full = ValveView::create(full_client.participant());
+  ASSERT_TRUE(full) << full.error().reason;
+  const std::atomic<bool> never{false};
+  const auto shown = [&never](ValveView& view, auto has) {
+    return view.wait_until(
+        [&has](const ValveTable& table) {
+          const auto row = table.row(0x0012'3456);
+          return row && row->online && has(*row);
+        },
+        std::chrono::steady_clock::now() + teejet::testing::scaled(kDeadline), never);
+  };
+  ASSERT_TRUE(shown(**full, [](const ValveRow& row) { return row.temperature_c().has_value(); }));
+  ASSERT_TRUE(shown(**lean, [](const ValveRow& row) { return row.position_degrees() == 42.5; }));
+  // Both views' position readers matched; only the full view's temperature reader exists.
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] {
+        eprosima::fastdds::dds::PublicationMatchedStatus matched;
+        position_writer->get_publication_matched_status(matched);
+        return matched.current_count == 2;
+      },
+      kDeadline));
+  eprosima::fastdds::dds::PublicationMatchedStatus temperature_matched;
+  temperature_writer->get_publication_matched_status(temperature_matched);
+  EXPECT_EQ(temperature_matched.current_count, 1);
+  EXPECT_FALSE((*lean)->snapshot().row(0x0012'3456)->temperature_c());
 }
 
 }  // namespace

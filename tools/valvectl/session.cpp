@@ -84,6 +84,29 @@ std::optional<std::string> awaited_reply(const ValveCommand& command) {
   return std::string(codec::subject(*message));
 }
 
+// What a run follows: a list or a watch everything; a command or a layout change the directory,
+// with the position it shows while it waits and the reply it awaits. Each topic followed is one
+// more sample per valve that every gateway sends this client as it joins.
+ViewTopics topics_for(const Invocation& invocation) {
+  switch (invocation.subcommand) {
+    case Subcommand::kLayoutChange:
+      return {.everything = false};
+    case Subcommand::kIdentify:
+      return {.everything = false, .telemetry = {"position"}};
+    case Subcommand::kCommand: {
+      ViewTopics topics{.everything = false};
+      const CommandRequest& request = invocation.command;
+      if (request.wait && shows_progress(request.command.kind())) {
+        topics.telemetry.insert("position");
+      }
+      if (const auto reply = awaited_reply(request.command)) topics.telemetry.insert(*reply);
+      return topics;
+    }
+    default:
+      return {};
+  }
+}
+
 std::string seconds_text(milliseconds duration) {
   std::ostringstream text;
   text << std::chrono::duration<double>(duration).count() << " s";
@@ -164,7 +187,7 @@ class Session {
                                                  .name = "valvectl",
                                                  .minimum_lease = lease_for(invocation_)});
     if (!participant) return participant.error();
-    auto view = ValveView::create(**participant);
+    auto view = ValveView::create(**participant, topics_for(invocation_));
     if (!view) return view.error();
     participant_ = std::move(*participant);
     view_ = std::move(*view);

@@ -56,8 +56,9 @@ ValveView::Reader ValveView::subscribe(
   return reader;
 }
 
-Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participant) {
-  std::unique_ptr<ValveView> view(new ValveView(participant));
+Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participant,
+                                                     const ViewTopics& topics) {
+  std::unique_ptr<ValveView> view(new ValveView(participant, topics));
   if (view->failure_) return *view->failure_;
   // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
   // that arrived before a reader had its listener are taken right after. Gateway status also
@@ -74,7 +75,8 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
   return view;
 }
 
-ValveView::ValveView(dds::Participant& participant) : participant_(participant) {
+ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
+    : participant_(participant) {
   subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
     table_.on_presence(sample, dds::participant_of(info.publication_handle));
   });
@@ -85,7 +87,8 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
   subscribe<ValveLocation>([this](const ValveLocation& sample, const SampleInfo& info) {
     table_.on_location(sample, dds::participant_of(info.publication_handle));
   });
-  subscribe_telemetry(std::type_identity<dds::TelemetrySample>{});
+  subscribe_telemetry(std::type_identity<dds::TelemetrySample>{}, topics);
+  if (!topics.everything) return;
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
   if (Reader errors = reader_of(dds::topics::kError,
@@ -95,11 +98,15 @@ ValveView::ValveView(dds::Participant& participant) : participant_(participant) 
 }
 
 template <class... Samples>
-void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>) {
+void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>,
+                                    const ViewTopics& topics) {
   // Every telemetry topic alike, as the codec's messages; errors are instances of their own.
-  const auto one = [this](auto identity) {
+  const auto one = [this, &topics](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
+      const std::string subject =
+          dds::topics::topic_name<Sample>().substr(dds::topics::kTelemetryPrefix.size());
+      if (!topics.everything && !topics.telemetry.contains(subject)) return;
       subscribe<Sample>([this](const Sample& sample, const SampleInfo&) {
         table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
       });

@@ -1,9 +1,9 @@
 #pragma once
 
-// A client's window on the domain: subscribes to presence, every telemetry topic, errors and
-// gateway status (durable topics, so a fresh client sees everything at once) and keeps the latest
-// per valve in a ValveTable. Listeners only take samples into the table; callers wait on
-// conditions over it.
+// A client's window on the domain: subscribes to presence, places and gateway status, and to every
+// telemetry topic and errors or only the telemetry it names (durable topics, so a fresh client
+// sees everything at once), and keeps the latest per valve in a ValveTable. Listeners only take
+// samples into the table; callers wait on conditions over it.
 
 #include <atomic>
 #include <chrono>
@@ -29,10 +29,20 @@ namespace teejet::client {
 
 using Deadline = std::chrono::steady_clock::time_point;
 
+// The telemetry a view follows besides presence, places and gateway status (always followed).
+// Every gateway sends a joining reader the last sample of each of its instances: a client that
+// needs only the directory (a command, a layout change) costs each gateway 32 samples a topic
+// for 32 valves, where following everything costs about twelve topics' worth.
+struct ViewTopics {
+  bool everything = true;           // every telemetry topic and the errors
+  std::set<std::string> telemetry;  // otherwise only these subjects ("position"), no errors
+};
+
 class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
  public:
-  // Subscribes to every durable topic; an Error names what DDS refused.
-  static Result<std::unique_ptr<ValveView>> create(dds::Participant& participant);
+  // Subscribes to the durable topics `topics` names; an Error names what DDS refused.
+  static Result<std::unique_ptr<ValveView>> create(dds::Participant& participant,
+                                                   const ViewTopics& topics = {});
   ~ValveView() override;
   ValveView(const ValveView&) = delete;
   ValveView& operator=(const ValveView&) = delete;
@@ -74,14 +84,14 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
  private:
   using Reader = eprosima::fastdds::dds::DataReader*;
   using Handler = std::function<void(Reader)>;
-  explicit ValveView(dds::Participant& participant);
+  ValveView(dds::Participant& participant, const ViewTopics& topics);
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
   Reader subscribe(
       std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample);
   Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
   template <class... Samples>
-  void subscribe_telemetry(std::type_identity<std::variant<Samples...>>);
+  void subscribe_telemetry(std::type_identity<std::variant<Samples...>>, const ViewTopics& topics);
   void take_errors(Reader reader);
   // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
   // matched count: asking it with mutex_ held would invert the lock order, so this runs first
