@@ -105,6 +105,38 @@ TEST(ParticipantLease, AMinimumLeaseIsAnnouncedAboveTheProfilesAndNoneKeepsThePr
   EXPECT_EQ(kept->seconds, 3);
 }
 
+std::chrono::nanoseconds announcement_period(const Participant& participant) {
+  const auto& period = participant.get()
+                           ->get_qos()
+                           .wire_protocol()
+                           .builtin.discovery_config.leaseDuration_announcementperiod;
+  return std::chrono::seconds(period.seconds) + std::chrono::nanoseconds(period.nanosec);
+}
+
+// A short-lived client announces itself less often than the profile's 250 ms; one that asks for
+// less than the profile, or for as much as its lease, keeps the profile's.
+TEST(ParticipantLease, ALeastAnnouncementPeriodSlowsOnlyTheParticipantThatAsksForIt) {
+  auto quiet = Participant::create({.domain = test_domain(),
+                                    .name = "quiet",
+                                    .minimum_lease = 30s,
+                                    .least_announcement_period = 2s});
+  ASSERT_TRUE(quiet) << quiet.error().reason;
+  auto plain = Participant::create({.domain = test_domain(), .name = "plain"});
+  ASSERT_TRUE(plain) << plain.error().reason;
+  auto below = Participant::create(
+      {.domain = test_domain(), .name = "below", .least_announcement_period = 100ms});
+  ASSERT_TRUE(below) << below.error().reason;
+  auto beyond_its_lease = Participant::create(
+      {.domain = test_domain(), .name = "beyond", .least_announcement_period = 3s});
+  ASSERT_TRUE(beyond_its_lease) << beyond_its_lease.error().reason;
+
+  EXPECT_EQ(announcement_period(**quiet), 2s);
+  // config/fastdds-loopback.xml: every 250 ms, a lease of 3 s.
+  EXPECT_EQ(announcement_period(**plain), 250ms);
+  EXPECT_EQ(announcement_period(**below), 250ms);
+  EXPECT_EQ(announcement_period(**beyond_its_lease), 250ms);
+}
+
 // The lease valvectl announces, as a peer hears it, for `arguments` against a domain without a
 // gateway (so that the run lasts until it is interrupted).
 std::optional<eprosima::fastrtps::Duration_t> valvectl_lease(

@@ -265,22 +265,34 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   if (lease < to_dds_duration(options.minimum_lease)) {
     lease = to_dds_duration(options.minimum_lease);
   }
+  auto& announcement =
+      qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod;
+  const auto profile_announcement =
+      std::chrono::seconds(announcement.seconds) + std::chrono::nanoseconds(announcement.nanosec);
+  const auto& transports = qos.transport().user_transports;
+  const bool uses_tcp =
+      std::any_of(transports.begin(), transports.end(), [](const auto& transport) {
+        return std::dynamic_pointer_cast<eprosima::fastdds::rtps::TCPTransportDescriptor>(
+                   transport) != nullptr;
+      });
+  // Over TCP an announcement is also what connects to an initial peer not yet reached.
+  if (!uses_tcp && options.least_announcement_period > profile_announcement &&
+      to_dds_duration(options.least_announcement_period) < lease) {
+    announcement = to_dds_duration(options.least_announcement_period);
+  }
   if (!options.role.empty()) {
     // Propagated: sent in the participant's discovery data, where any participant reads it.
     qos.properties().properties().emplace_back(kRoleProperty, options.role, true);
   }
   std::unique_ptr<Participant> made(new Participant());
+  made->profile_announcement_ = profile_announcement;
   made->discovery_listener_ = std::make_unique<DiscoveryListener>(options.on_participant_dropped);
   // Discovery callbacks ignore the mask; StatusMask::none() keeps the participant listener
   // from taking the readers' data-available callbacks.
   made->participant_ =
       factory->create_participant(static_cast<DomainId_t>(options.domain), qos,
                                   made->discovery_listener_.get(), StatusMask::none());
-  const auto& transports = qos.transport().user_transports;
-  made->uses_tcp_ = std::any_of(transports.begin(), transports.end(), [](const auto& transport) {
-    return std::dynamic_pointer_cast<eprosima::fastdds::rtps::TCPTransportDescriptor>(transport) !=
-           nullptr;
-  });
+  made->uses_tcp_ = uses_tcp;
   const std::string security = security_plugins(qos);
   made->setup_ = profile_source(options.profile_file) + "; DDS-Security " +
                  (security.empty() ? "off" : "on (" + security + ")");
@@ -314,12 +326,8 @@ std::set<std::string> Participant::participants_with_role(std::string_view role)
 std::size_t Participant::participants_met() const { return discovery_listener_->count(); }
 
 bool Participant::discovery_settled() const {
-  const auto& discovery = participant_->get_qos().wire_protocol().builtin.discovery_config;
-  const auto& period = discovery.leaseDuration_announcementperiod;
-  const auto announcement =
-      std::chrono::seconds(period.seconds) + std::chrono::nanoseconds(period.nanosec);
-  const auto quiet =
-      std::min<std::chrono::steady_clock::duration>(2 * announcement, std::chrono::seconds(1));
+  const auto quiet = std::min<std::chrono::steady_clock::duration>(2 * profile_announcement_,
+                                                                   std::chrono::seconds(1));
   return std::chrono::steady_clock::now() - created_ >= quiet;
 }
 

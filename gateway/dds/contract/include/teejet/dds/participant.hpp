@@ -50,6 +50,13 @@ struct ParticipantOptions {
   // while a peer's lease check for it runs, and a peer checks once per lease (docs/topics.md,
   // "Short-lived participants").
   std::chrono::seconds minimum_lease{0};
+  // The least period of this participant's periodic announcements, whatever the profile says
+  // (below its lease); zero: the profile's. Discovery does not wait for them: a participant
+  // meets the others through its initial announcements (Fast DDS: five, 100 ms apart) and by
+  // answering theirs, so they only keep its lease. A client that announces a long lease need not
+  // announce four times a second to every participant of the domain (the loopback profile):
+  // two hundred at once would keep every CPU busy with announcements.
+  std::chrono::milliseconds least_announcement_period{0};
 };
 
 // A timeout as Fast DDS's waits take it: below zero is zero, beyond Duration_t's seconds its
@@ -104,8 +111,8 @@ class Participant {
   std::set<std::string> participants_with_role(std::string_view role) const;
   // How many remote participants discovery has found alive, whatever their role.
   std::size_t participants_met() const;
-  // Whether every participant already running has had the time to be met: two of this one's
-  // announcement periods (at most 1 s) since it was made. A participant already running may
+  // Whether every participant already running has had the time to be met: two of the profile's
+  // announcement periods (at most 1 s) since this one was made. A participant already running may
   // answer a newcomer only at its next periodic announcement (the loopback profile's 250 ms), so
   // until then the participants met so far need not be all there are. Participants met later
   // (started after this one, or whose announcements were lost) do not extend it; a gateway
@@ -161,6 +168,8 @@ class Participant {
   std::string setup_;
   bool uses_tcp_ = false;
   std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
+  // The others' announcement period, as the profile gives it (this one's may be longer).
+  std::chrono::nanoseconds profile_announcement_{0};
 };
 
 }  // namespace teejet::dds
