@@ -128,5 +128,51 @@ TEST(ValveView, AViewOfSomeTelemetryNeitherSubscribesToNorShowsTheRest) {
   EXPECT_FALSE((*lean)->snapshot().row(0x0012'3456)->temperature_c());
 }
 
+// `valvectl move TJV… --wait` follows the position of its own valve only: the gateway sends it
+// no other valve's (a serial filter, dds/serial_filter.hpp).
+TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
+  DdsPeer gateway(test_domain(), "gateway-by-hand");
+  auto presence_topic = dds::topics::topic_of<ValvePresence>(gateway.participant());
+  auto position_topic = dds::topics::topic_of<ValvePosition>(gateway.participant());
+  ASSERT_TRUE(presence_topic && position_topic);
+  auto presence_writer =
+      gateway.participant().writer(*presence_topic, dds::topics::state_writer_qos());
+  auto position_writer =
+      gateway.participant().writer(*position_topic, dds::topics::state_writer_qos());
+  ASSERT_TRUE(presence_writer && position_writer);
+  DdsPeer client(test_domain(), "client");
+  auto view =
+      ValveView::create(client.participant(),
+                        {.everything = false, .telemetry = {"position"}, .serials = {0x0012'3456}});
+  ASSERT_TRUE(view) << view.error().reason;
+  DdsPeer full_client(test_domain(), "full-client");
+  auto full = ValveView::create(full_client.participant());
+  ASSERT_TRUE(full) << full.error().reason;
+
+  // Written after both views exist, again and again: both the history a joiner gets and the
+  // samples written since go through the filter.
+  const std::atomic<bool> never{false};
+  for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
+    ValvePresence online = presence(serial, true);
+    ASSERT_TRUE((*presence_writer)->write(&online));
+  }
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] {
+        for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
+          ValvePosition position;
+          position.serial(serial);
+          position.degrees(serial == 0x0012'3456 ? 10.5F : 20.5F);
+          (*position_writer)->write(&position);
+        }
+        const auto seen = (*full)->snapshot().row(0x0065'4321);
+        const auto own = (*view)->snapshot().row(0x0012'3456);
+        return seen && seen->position_degrees() == 20.5 && own && own->position_degrees() == 10.5;
+      },
+      kDeadline));
+  const auto other = (*view)->snapshot().row(0x0065'4321);
+  ASSERT_TRUE(other) << "presence is not filtered";
+  EXPECT_FALSE(other->position_degrees()) << "another valve's position reached the view";
+}
+
 }  // namespace
 }  // namespace teejet::client

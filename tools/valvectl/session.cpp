@@ -88,8 +88,9 @@ std::optional<std::string> awaited_reply(const ValveCommand& command) {
 }
 
 // What a run follows: a list or a watch everything; a command or a layout change the directory,
-// with the position it shows while it waits and the reply it awaits. Each topic followed is one
-// more sample per valve that every gateway sends this client as it joins.
+// with the position it shows while it waits and the reply it awaits, of the valves named on the
+// command line only when it names them. Each topic followed is one more sample per valve that
+// every gateway sends this client as it joins; each valve of it, ten a second for a position.
 ViewTopics topics_for(const Invocation& invocation) {
   switch (invocation.subcommand) {
     case Subcommand::kLayoutChange:
@@ -97,8 +98,9 @@ ViewTopics topics_for(const Invocation& invocation) {
     case Subcommand::kIdentify:
       return {.everything = false, .telemetry = {"position"}};
     case Subcommand::kCommand: {
-      ViewTopics topics{.everything = false};
       const CommandRequest& request = invocation.command;
+      ViewTopics topics{.everything = false,
+                        .serials = {request.serials.begin(), request.serials.end()}};
       if (request.wait && shows_progress(request.command.kind())) {
         topics.telemetry.insert("position");
       }

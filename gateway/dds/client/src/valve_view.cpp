@@ -15,7 +15,8 @@ using eprosima::fastdds::dds::SampleInfo;
 using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 ValveView::Reader ValveView::reader_of(const std::string& topic_name,
-                                       Result<eprosima::fastdds::dds::Topic*> topic) {
+                                       Result<eprosima::fastdds::dds::Topic*> topic,
+                                       const std::set<std::uint32_t>& serials) {
   if (failure_) return nullptr;
   if (!topic) {
     failure_ = topic.error();
@@ -23,9 +24,12 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
   }
   // No listener yet: create() attaches them once handlers_ is complete. Gateway status follows
   // its writers' liveliness: a gateway that dies without a word is shown lost.
-  auto reader = participant_.reader(*topic, topic_name == dds::topics::kGatewayStatus
-                                                ? dds::topics::liveliness_reader_qos()
-                                                : dds::topics::state_reader_qos());
+  auto reader =
+      !serials.empty()
+          ? participant_.reader_of_serials(*topic, serials, dds::topics::state_reader_qos())
+          : participant_.reader(*topic, topic_name == dds::topics::kGatewayStatus
+                                            ? dds::topics::liveliness_reader_qos()
+                                            : dds::topics::state_reader_qos());
   if (!reader) {
     failure_ = Error{reader.error().code, reader.error().reason + " (" + topic_name + ")"};
     return nullptr;
@@ -35,9 +39,10 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
 
 template <class Sample>
 ValveView::Reader ValveView::subscribe(
-    std::function<void(const Sample&, const SampleInfo&)> on_sample) {
-  Reader reader =
-      reader_of(dds::topics::topic_name<Sample>(), dds::topics::topic_of<Sample>(participant_));
+    std::function<void(const Sample&, const SampleInfo&)> on_sample,
+    const std::set<std::uint32_t>& serials) {
+  Reader reader = reader_of(dds::topics::topic_name<Sample>(),
+                            dds::topics::topic_of<Sample>(participant_), serials);
   if (reader == nullptr) return nullptr;
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
@@ -107,9 +112,11 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
       const std::string subject =
           dds::topics::topic_name<Sample>().substr(dds::topics::kTelemetryPrefix.size());
       if (!topics.everything && !topics.telemetry.contains(subject)) return;
-      subscribe<Sample>([this](const Sample& sample, const SampleInfo&) {
-        table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
-      });
+      subscribe<Sample>(
+          [this](const Sample& sample, const SampleInfo&) {
+            table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
+          },
+          topics.everything ? std::set<std::uint32_t>{} : topics.serials);
     }
   };
   (one(std::type_identity<Samples>{}), ...);

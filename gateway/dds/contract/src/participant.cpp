@@ -16,6 +16,8 @@
 #include <sstream>
 #include <vector>
 
+#include "teejet/dds/serial_filter.hpp"
+
 #if TEEJET_DDS_TYPE_OBJECTS
 #include "teejet/valveTypeObject.h"
 #endif
@@ -309,6 +311,9 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
     }
     return refused(why);
   }
+  if (!register_serial_filter(*made->participant_)) {
+    return refused("cannot register the serial content filter");
+  }
   made->publisher_ =
       made->participant_->create_publisher(made->participant_->get_default_publisher_qos());
   made->subscriber_ =
@@ -362,6 +367,23 @@ Result<DataReader*> Participant::reader(Topic* topic, const DataReaderQos& qos,
   DataReader* reader = subscriber_->create_datareader(
       topic, qos, listener, listener == nullptr ? StatusMask::none() : mask);
   if (reader == nullptr) return refused("cannot create a reader for " + topic->get_name());
+  return reader;
+}
+
+Result<DataReader*> Participant::reader_of_serials(Topic* topic,
+                                                   const std::set<std::uint32_t>& serials,
+                                                   const DataReaderQos& qos) {
+  const std::string expression = serial_filter_expression(serials);
+  const std::string name = topic->get_name() + " serials " + expression;
+  auto it = filtered_topics_.find(name);
+  if (it == filtered_topics_.end()) {
+    auto* filtered =
+        participant_->create_contentfilteredtopic(name, topic, expression, {}, kSerialFilterClass);
+    if (filtered == nullptr) return refused("cannot filter " + topic->get_name() + " by serial");
+    it = filtered_topics_.emplace(name, filtered).first;
+  }
+  DataReader* reader = subscriber_->create_datareader(it->second, qos, nullptr, StatusMask::none());
+  if (reader == nullptr) return refused("cannot create a reader for " + name);
   return reader;
 }
 

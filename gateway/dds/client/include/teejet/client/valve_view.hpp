@@ -36,6 +36,9 @@ using Deadline = std::chrono::steady_clock::time_point;
 struct ViewTopics {
   bool everything = true;           // every telemetry topic and the errors
   std::set<std::string> telemetry;  // otherwise only these subjects ("position"), no errors
+  // With `telemetry`: only these valves' samples of it (empty: every valve's), which a gateway
+  // then does not send the others of (dds/serial_filter.hpp). Presence stays whole.
+  std::set<std::uint32_t> serials;
 };
 
 class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
@@ -88,8 +91,10 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
   Reader subscribe(
-      std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample);
-  Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic);
+      std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample,
+      const std::set<std::uint32_t>& serials = {});
+  Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic,
+                   const std::set<std::uint32_t>& serials = {});
   template <class... Samples>
   void subscribe_telemetry(std::type_identity<std::variant<Samples...>>, const ViewTopics& topics);
   void take_errors(Reader reader);

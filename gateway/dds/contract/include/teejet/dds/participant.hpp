@@ -15,6 +15,7 @@
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/ContentFilteredTopic.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <functional>
@@ -146,6 +147,11 @@ class Participant {
       const eprosima::fastdds::dds::StatusMask& mask =
           eprosima::fastdds::dds::StatusMask::data_available()
           << eprosima::fastdds::dds::StatusMask::liveliness_changed());
+  // A reader of `topic` that gets the samples of `serials` only (dds/serial_filter.hpp): a gateway
+  // of this version filters them before it sends.
+  Result<eprosima::fastdds::dds::DataReader*> reader_of_serials(
+      eprosima::fastdds::dds::Topic* topic, const std::set<std::uint32_t>& serials,
+      const eprosima::fastdds::dds::DataReaderQos& qos);
 
   // Delete a reader or writer made here (nullptr: nothing); after delete_reader returns no
   // callback reaches its listener.
@@ -165,6 +171,7 @@ class Participant {
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
+  std::map<std::string, eprosima::fastdds::dds::ContentFilteredTopic*> filtered_topics_;
   std::string setup_;
   bool uses_tcp_ = false;
   std::chrono::steady_clock::time_point created_ = std::chrono::steady_clock::now();
