@@ -90,7 +90,7 @@ std::optional<std::string> awaited_reply(const ValveCommand& command) {
 // What a run follows: a list or a watch everything; a command or a layout change the directory,
 // with the position it shows while it waits and the reply it awaits, of the valves named on the
 // command line only when it names them. Each topic followed is one more sample per valve that
-// every gateway sends this client as it joins; each valve of it, ten a second for a position.
+// every gateway sends this client as it joins; each valve's position ten more a second to take.
 ViewTopics topics_for(const Invocation& invocation) {
   switch (invocation.subcommand) {
     case Subcommand::kLayoutChange:

@@ -81,8 +81,10 @@ ReturnCode SerialFilterFactory::delete_content_filter(
 }
 
 bool register_serial_filter(eprosima::fastdds::dds::DomainParticipant& participant) {
-  static SerialFilterFactory factory;
-  return participant.register_content_filter_factory(kSerialFilterClass, &factory) ==
+  // Never destroyed: Fast DDS's own singleton, destroyed after this file's statics, may still
+  // delete filters of a participant left to it at exit.
+  static auto* const factory = new SerialFilterFactory();
+  return participant.register_content_filter_factory(kSerialFilterClass, factory) ==
          ReturnCode::RETCODE_OK;
 }
 

@@ -31,10 +31,6 @@ constexpr std::int32_t kCommandsQueuedPerValve = 256;
 // gateway takes commands as they come.
 constexpr std::int32_t kCommandsHeldPerValve = 4096;
 
-// Readers filtered by serial a state writer filters itself; each costs one look at the
-// serial per sample written.
-constexpr std::size_t kMaxFilteredReaders = 1024;
-
 const eprosima::fastrtps::Duration_t kInitialAcknackDelay{0, 5'000'000};
 const eprosima::fastrtps::Duration_t kStateHeartbeat{0, 200'000'000};
 
@@ -84,10 +80,6 @@ DataWriterQos state_writer_qos() {
   qos.liveliness().lease_duration = kStateLease;
   qos.liveliness().announcement_period = kStateAnnouncement;
   qos.reliable_writer_qos().times.heartbeatPeriod = kStateHeartbeat;
-  // Readers filtered by serial (dds/serial_filter.hpp) that the writer filters before it sends;
-  // Fast DDS's default stops at 32, and the readers beyond filter what they are sent.
-  qos.writer_resource_limits().reader_filters_allocation =
-      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kMaxFilteredReaders, 1);
   return qos;
 }
 DataReaderQos state_reader_qos() {

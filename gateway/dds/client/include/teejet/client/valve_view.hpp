@@ -36,8 +36,8 @@ using Deadline = std::chrono::steady_clock::time_point;
 struct ViewTopics {
   bool everything = true;           // every telemetry topic and the errors
   std::set<std::string> telemetry;  // otherwise only these subjects ("position"), no errors
-  // With `telemetry`: only these valves' samples of it (empty: every valve's), which a gateway
-  // then does not send the others of (dds/serial_filter.hpp). Presence stays whole.
+  // With `telemetry`: only these valves' samples of it (empty: every valve's); the others are
+  // dropped as they arrive (dds/serial_filter.hpp). Presence stays whole.
   std::set<std::uint32_t> serials;
 };
 

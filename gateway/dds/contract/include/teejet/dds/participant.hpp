@@ -147,8 +147,7 @@ class Participant {
       const eprosima::fastdds::dds::StatusMask& mask =
           eprosima::fastdds::dds::StatusMask::data_available()
           << eprosima::fastdds::dds::StatusMask::liveliness_changed());
-  // A reader of `topic` that gets the samples of `serials` only (dds/serial_filter.hpp): a gateway
-  // of this version filters them before it sends.
+  // A reader of `topic` that keeps the samples of `serials` only (dds/serial_filter.hpp).
   Result<eprosima::fastdds::dds::DataReader*> reader_of_serials(
       eprosima::fastdds::dds::Topic* topic, const std::set<std::uint32_t>& serials,
       const eprosima::fastdds::dds::DataReaderQos& qos);

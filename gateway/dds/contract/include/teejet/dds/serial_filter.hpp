@@ -1,11 +1,11 @@
 #pragma once
 
-// A content filter on a valve's serial, so that a reader of a telemetry topic gets the samples of
-// the valves it names and no others. Every participant made by dds::Participant registers it, so
-// a gateway's writers apply it before they send (writer-side filtering): a client that follows
-// one valve's position costs a gateway the samples of that valve, not of its 32. A writer that
-// does not know the filter (another vendor's, an older gateway) sends everything and the reader
-// drops the rest itself.
+// A content filter on a valve's serial, so that a reader of a telemetry topic keeps the samples of
+// the valves it names and no others: the rest are dropped as they arrive, before they are
+// deserialized, stored or handed to a listener. Every participant made by dds::Participant
+// registers it. Fast DDS 2.9.1 filters on the writer's side only for writers without a liveliness
+// lease, and the gateway's state writers have one (3 s, how a dead gateway is noticed): a gateway
+// still sends a filtered reader every sample, and the reader's host still receives them.
 //
 // Filter class kSerialFilterClass; its expression is the serials in decimal, separated by spaces
 // ("1 200005"). It reads the serial where every keyed valve type of the contract has it: its
