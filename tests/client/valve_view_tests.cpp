@@ -128,8 +128,8 @@ TEST(ValveView, AViewOfSomeTelemetryNeitherSubscribesToNorShowsTheRest) {
   EXPECT_FALSE((*lean)->snapshot().row(0x0012'3456)->temperature_c());
 }
 
-// `valvectl move TJV… --wait` follows the position of its own valve only: the gateway sends it
-// no other valve's (a serial filter, dds/serial_filter.hpp).
+// `valvectl move TJV… --wait` follows the position of its own valve only: the others arrive and
+// are dropped by a serial filter before they reach the table (dds/serial_filter.hpp).
 TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
   DdsPeer gateway(test_domain(), "gateway-by-hand");
   auto presence_topic = dds::topics::topic_of<ValvePresence>(gateway.participant());

@@ -106,11 +106,10 @@ TEST(ParticipantLease, AMinimumLeaseIsAnnouncedAboveTheProfilesAndNoneKeepsThePr
 }
 
 std::chrono::nanoseconds announcement_period(const Participant& participant) {
-  const auto& period = participant.get()
-                           ->get_qos()
-                           .wire_protocol()
-                           .builtin.discovery_config.leaseDuration_announcementperiod;
-  return std::chrono::seconds(period.seconds) + std::chrono::nanoseconds(period.nanosec);
+  return from_dds_duration(participant.get()
+                               ->get_qos()
+                               .wire_protocol()
+                               .builtin.discovery_config.leaseDuration_announcementperiod);
 }
 
 // A short-lived client announces itself less often than the profile's 250 ms; one that asks for

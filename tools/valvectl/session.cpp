@@ -18,6 +18,7 @@
 #include "teejet/codec/table.hpp"
 #include "teejet/dds/conversions.hpp"
 #include "teejet/dds/tcp_rejoin.hpp"
+#include "teejet/dds/topics.hpp"
 
 namespace teejet::valvectl {
 
@@ -96,13 +97,13 @@ ViewTopics topics_for(const Invocation& invocation) {
     case Subcommand::kLayoutChange:
       return {.everything = false};
     case Subcommand::kIdentify:
-      return {.everything = false, .telemetry = {"position"}};
+      return {.everything = false, .telemetry = {dds::topics::telemetry_subject<ValvePosition>()}};
     case Subcommand::kCommand: {
       const CommandRequest& request = invocation.command;
       ViewTopics topics{.everything = false,
                         .serials = {request.serials.begin(), request.serials.end()}};
       if (request.wait && shows_progress(request.command.kind())) {
-        topics.telemetry.insert("position");
+        topics.telemetry.insert(dds::topics::telemetry_subject<ValvePosition>());
       }
       if (const auto reply = awaited_reply(request.command)) topics.telemetry.insert(*reply);
       return topics;

@@ -109,9 +109,10 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
   const auto one = [this, &topics](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
-      const std::string subject =
-          dds::topics::topic_name<Sample>().substr(dds::topics::kTelemetryPrefix.size());
-      if (!topics.everything && !topics.telemetry.contains(subject)) return;
+      if (!topics.everything &&
+          !topics.telemetry.contains(dds::topics::telemetry_subject<Sample>())) {
+        return;
+      }
       subscribe<Sample>(
           [this](const Sample& sample, const SampleInfo&) {
             table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());

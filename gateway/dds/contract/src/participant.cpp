@@ -269,8 +269,7 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   }
   auto& announcement =
       qos.wire_protocol().builtin.discovery_config.leaseDuration_announcementperiod;
-  const auto profile_announcement =
-      std::chrono::seconds(announcement.seconds) + std::chrono::nanoseconds(announcement.nanosec);
+  const auto profile_announcement = from_dds_duration(announcement);
   const auto& transports = qos.transport().user_transports;
   const bool uses_tcp =
       std::any_of(transports.begin(), transports.end(), [](const auto& transport) {

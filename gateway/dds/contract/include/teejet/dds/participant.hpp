@@ -69,6 +69,11 @@ inline eprosima::fastrtps::Duration_t to_dds_duration(std::chrono::nanoseconds t
           static_cast<std::uint32_t>((left - whole).count())};
 }
 
+// A Fast DDS duration (a lease, an announcement period) as nanoseconds.
+inline std::chrono::nanoseconds from_dds_duration(const eprosima::fastrtps::Duration_t& duration) {
+  return std::chrono::seconds(duration.seconds) + std::chrono::nanoseconds(duration.nanosec);
+}
+
 // Nanoseconds since the Unix epoch as a DDS timestamp (the source timestamp of a write);
 // beyond Time_t's seconds its largest.
 inline eprosima::fastrtps::Time_t to_dds_time(std::uint64_t unix_ns) {

@@ -10,7 +10,7 @@
 // Filter class kSerialFilterClass; its expression is the serials in decimal, separated by spaces
 // ("1 200005"). It reads the serial where every keyed valve type of the contract has it: its
 // first member, `@key uint32 serial`, right after the CDR encapsulation (tests/dds check that for
-// every topic). A sample in another representation passes.
+// presence and every telemetry type). A sample in another representation passes.
 
 #include <cstdint>
 #include <fastdds/dds/domain/DomainParticipant.hpp>

@@ -60,6 +60,14 @@ const std::string& topic_name() {
   return name;
 }
 
+// A telemetry type's subject, its topic name without kTelemetryPrefix: the codec's name of the
+// message it carries ("position", "cycle_counts").
+template <class Sample>
+requires(kIsAlternative<Sample> && !std::is_same_v<Sample, ValveError>) std::string
+    telemetry_subject() {
+  return topic_name<Sample>().substr(kTelemetryPrefix.size());
+}
+
 // The topic of `Sample` in `participant`, registering its type support on first use.
 template <class Sample>
 Result<eprosima::fastdds::dds::Topic*> topic_of(Participant& participant) {
