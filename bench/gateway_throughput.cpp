@@ -225,7 +225,7 @@ std::optional<double> bare_fastdds_writes_per_second(const Options& options) {
   if (!participant) return std::nullopt;
   auto topic = (*participant)->topic<ValvePositionPubSubType>("bench/throughput/position");
   if (!topic) return std::nullopt;
-  auto writer = (*participant)->writer(*topic, teejet::dds::topics::telemetry_writer_qos());
+  auto writer = (*participant)->writer(*topic, teejet::dds::topics::state_writer_qos());
   if (!writer) return std::nullopt;
   ValvePosition sample;
   // 200,000 writes, or what two seconds allow (user-mode-linux manages a few thousand).

@@ -209,7 +209,7 @@ int run_baseline(const Options& options) {
     if (!reader) return fail(reader.error());
   }
   const int position = run_baseline_topic<ValvePosition>(options, **participant, "position",
-                                                         topics::telemetry_writer_qos(),
+                                                         topics::state_writer_qos(),
                                                          &baseline_position, "baseline_position");
   const int command = run_baseline_topic<ValveCommand>(options, **participant, "command",
                                                        topics::command_writer_qos(),

@@ -23,7 +23,6 @@ using eprosima::fastrtps::rtps::SerializedPayload_t;
 // How the recorder's reader and the replayer's writer of a topic are set up.
 enum class Kind {
   kState,          // RELIABLE, TRANSIENT_LOCAL: a late recorder gets every instance's value
-  kTelemetry,      // kState, written as a gateway writes it (no liveliness lease)
   kCommandStatus,  // RELIABLE, TRANSIENT_LOCAL, 32 per valve
   kCommand,        // RELIABLE, VOLATILE: a command writer keeps nothing for late readers
   kFrame,          // BEST_EFFORT, VOLATILE
@@ -43,7 +42,6 @@ DataReaderQos recorder_qos(Kind kind) {
   DataReaderQos qos;
   switch (kind) {
     case Kind::kState:
-    case Kind::kTelemetry:
       qos = dds::topics::state_reader_qos();
       break;
     case Kind::kCommandStatus:
@@ -69,8 +67,6 @@ DataWriterQos replayer_qos(Kind kind) {
   switch (kind) {
     case Kind::kState:
       return dds::topics::state_writer_qos();
-    case Kind::kTelemetry:
-      return dds::topics::telemetry_writer_qos();
     case Kind::kCommandStatus:
       return dds::topics::status_writer_qos();
     case Kind::kCommand:
@@ -202,15 +198,13 @@ Result<std::unique_ptr<TopicWriter>> open_writer(dds::Participant& participant, 
   return std::unique_ptr<TopicWriter>(std::make_unique<TypedWriter<Sample>>(*writer));
 }
 
-// Commands and frames are events, statuses are kept 32 deep; everything else is state, and
-// telemetry (errors too) is the state the gateway writes without a liveliness lease.
+// Commands and frames are events, statuses are kept 32 deep; everything else is state.
 template <class Sample>
 constexpr Kind kKindOf =
     std::is_same_v<Sample, ValveCommand> || std::is_same_v<Sample, LayoutChange> ? Kind::kCommand
     : std::is_same_v<Sample, CommandStatus> || std::is_same_v<Sample, LayoutChangeStatus>
         ? Kind::kCommandStatus
     : std::is_same_v<Sample, BusFrame> ? Kind::kFrame
-    : dds::kIsAlternative<Sample>      ? Kind::kTelemetry
                                        : Kind::kState;
 
 template <class Sample>
@@ -221,8 +215,7 @@ TopicType entry() {
       .topic = dds::topics::topic_name<Sample>(),
       .type_name = type.getName(),
       .keyed = type.m_isGetKeyDefined,
-      .durable =
-          kKind == Kind::kState || kKind == Kind::kTelemetry || kKind == Kind::kCommandStatus,
+      .durable = kKind == Kind::kState || kKind == Kind::kCommandStatus,
       .open_reader =
           [](dds::Participant& participant) { return open_reader<Sample>(participant, kKind); },
       .open_writer =

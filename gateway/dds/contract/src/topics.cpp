@@ -33,11 +33,6 @@ constexpr std::int32_t kCommandsHeldPerValve = 4096;
 
 const eprosima::fastrtps::Duration_t kInitialAcknackDelay{0, 5'000'000};
 const eprosima::fastrtps::Duration_t kStateHeartbeat{0, 200'000'000};
-// Readers of some valves' telemetry (a content filter, dds/serial_filter.hpp) that one telemetry
-// writer filters for before it sends; beyond them, a reader gets every sample and filters it
-// itself. Each adds its filter's 16-byte signature to every sample the writer sends to anyone
-// (Fast DDS's ContentFilterInfo, sent inline): 64 of them, about 1 KiB.
-constexpr std::uint32_t kFilteredReadersPerWriter = 64;
 
 template <class Qos>
 Qos reliable(DurabilityQosPolicyKind durability, HistoryQosPolicyKind history, int depth) {
@@ -85,16 +80,6 @@ DataWriterQos state_writer_qos() {
   qos.liveliness().lease_duration = kStateLease;
   qos.liveliness().announcement_period = kStateAnnouncement;
   qos.reliable_writer_qos().times.heartbeatPeriod = kStateHeartbeat;
-  return qos;
-}
-DataWriterQos telemetry_writer_qos() {
-  auto qos = state_writer_qos();
-  // Fast DDS 2.9.1 filters on a writer's side only for a writer without a liveliness lease; a
-  // gateway's death is told by its other state writers' lease (gateway status, presence).
-  qos.liveliness().lease_duration = eprosima::fastrtps::c_TimeInfinite;
-  qos.liveliness().announcement_period = eprosima::fastrtps::c_TimeInfinite;
-  qos.writer_resource_limits().reader_filters_allocation =
-      eprosima::fastrtps::ResourceLimitedContainerConfig(0, kFilteredReadersPerWriter, 1);
   return qos;
 }
 DataReaderQos state_reader_qos() {

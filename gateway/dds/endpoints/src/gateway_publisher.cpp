@@ -29,8 +29,7 @@ Result<std::unique_ptr<GatewayPublisher>> GatewayPublisher::create(
     Participant& participant, const std::string& gateway_name,
     const std::set<std::string>& locations) {
   std::unique_ptr<GatewayPublisher> made(new GatewayPublisher());
-  if (auto created = made->telemetry_.create(participant, topics::telemetry_writer_qos());
-      !created) {
+  if (auto created = made->telemetry_.create(participant, topics::state_writer_qos()); !created) {
     return created.error();
   }
   if (auto created = made->state_.create(participant, topics::state_writer_qos()); !created) {

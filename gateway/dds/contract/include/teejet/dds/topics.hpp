@@ -93,12 +93,7 @@ using EverySampleType = decltype(every_sample_type(std::type_identity<TelemetryS
 // BEST_EFFORT or VOLATILE reader still matches.
 eprosima::fastdds::dds::DataWriterQos state_writer_qos();
 eprosima::fastdds::dds::DataReaderQos state_reader_qos();
-// state_writer_qos() without a liveliness lease, for telemetry and errors: the writer applies a
-// reader's content filter (dds/serial_filter.hpp) before it sends, so a client that follows a few
-// valves is sent their samples only. A reader asking for a liveliness lease does not match it:
-// follow a gateway's liveliness on its status (liveliness_reader_qos()).
-eprosima::fastdds::dds::DataWriterQos telemetry_writer_qos();
-// state_reader_qos() that also follows its writers' liveliness (3 s, as state_writer_qos() offers):
+// state_reader_qos() that also follows its writers' liveliness (3 s, as the state writers offer):
 // Fast DDS watches a writer's liveliness only for a reader that asks for a finite lease. A
 // writer offering none (another vendor's, an older gateway) does not match it.
 eprosima::fastdds::dds::DataReaderQos liveliness_reader_qos();
