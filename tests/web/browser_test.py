@@ -6,7 +6,8 @@ read-only, and headless Chromium driven by Selenium through chromedriver:
 
   (a) the page shows exactly the cards TJV000001..TJV000004, all online;
   (b) a move of TJV000002 to 90 degrees typed and clicked in the page reaches "completed" in the
-      card's status line, and the dial's reading and needle follow to 90 +- 1;
+      card's status line, and the dial's reading and needle follow to 90 +- 1; meanwhile the
+      page writes to no other valve's card;
   (c) the read-only page has no command controls in its DOM, and a WebSocket opened by the page's
       own JavaScript that sends a move gets "refused" with the read-only reason; the valve stays;
   (d) a screenshot of the commanding page after the move (the plot showing it) is kept in the
@@ -173,6 +174,25 @@ return {visible: !q('#setup').hidden,
 """
 
 
+# Which cards the page writes to while it runs: the serial of every card a DOM change touched.
+# An update rewrites only what changed, so a move touches the moving valve's card alone (a page
+# rewriting every card on every update cost Chromium a whole core at 256 valves).
+CARD_WRITES_JS = """
+const cards = document.getElementById('cards');
+const touched = new Set();
+const observer = new MutationObserver((records) => {
+  for (const record of records) {
+    const node = record.target.nodeType === Node.ELEMENT_NODE ? record.target
+                                                              : record.target.parentElement;
+    const card = node && node.closest('.card');
+    touched.add(card ? card.dataset.serial : '(outside a card)');
+  }
+});
+observer.observe(cards, {subtree: true, childList: true, characterData: true, attributes: true});
+window.__cardWrites = () => { observer.disconnect(); return [...touched].sort(); };
+"""
+
+
 def setup_view(driver, layout, artifacts):
     driver.find_element(By.ID, "setup-toggle").click()
     seen = eventually(lambda: driver.execute_script(SETUP_JS), 10,
@@ -230,6 +250,7 @@ def commanding_page(driver, artifacts, screenshot, layout):
     speed.send_keys("100")
     Select(target.find_element(By.CSS_SELECTOR, ".move-direction")).select_by_value("shortest")
     frames_before = driver.execute_script("return window.teejetDashboard.stats.frames_painted")
+    driver.execute_script(CARD_WRITES_JS)
     target.find_element(By.CSS_SELECTOR, ".move-send").click()
     final = eventually(lambda: card(driver, "TJV000002"), 30,
                        "a final status of the move in TJV000002's status line",
@@ -248,6 +269,9 @@ def commanding_page(driver, artifacts, screenshot, layout):
                ok=lambda c: c["position"] == "90.0°" and c["needle"] == "90")
     others = [c for c in cards(driver) if c["serial"] != "TJV000002" and c["state"] is not None]
     check(not others, f"a status line on a valve that was not commanded: {others}")
+    written = driver.execute_script("return window.__cardWrites()")
+    check(written == ["TJV000002"],
+          f"the page wrote to the cards of {written} while only TJV000002 moved")
     print(f"(b) move to 90 completed: status {final['status']!r}, dial {moved['position']}, "
           f"needle {moved['needle']}")
 

@@ -12,6 +12,7 @@
 
   const valves = new Map();    // serial -> {data, card, history: [[t, json]], color}
   const gateways = new Map();  // name -> element
+  const shownGateways = new Map();  // name -> the status it shows (JSON), to skip repeats
   const places = new Map();    // "gateway/location" -> place JSON (docs/web.md)
   const sentCommands = new Map();  // request id -> serials it was for (until answered)
   // Valves being identified: serial -> {steps: [[degrees, direction], ...], at, requestId,
@@ -55,6 +56,19 @@
     const node = document.createElementNS(SVG, tag);
     for (const [k, v] of Object.entries(attrs)) node.setAttribute(k, v);
     return node;
+  }
+
+  // Write to the page only what changed: each write makes the browser restyle (and often lay
+  // out) what it touched, and with hundreds of cards an update rewriting them all costs it a
+  // whole core (measured at 8 gateways x 32 valves: docs/performance.md, "Dashboard").
+  function setText(node, text) {
+    if (node.textContent !== text) node.textContent = text;
+  }
+  function setAttr(node, name, value) {
+    if (node.getAttribute(name) !== value) node.setAttribute(name, value);
+  }
+  function setData(node, name, value) {
+    if (node.dataset[name] !== value) node.dataset[name] = value;
   }
 
   const dash = "—";
@@ -261,9 +275,9 @@
     const title = place ? place.location : d.serial;
     const order = place ? String(place.order) : "";
     const unassigned = !place && places.size > 0 && d.online;
-    card.querySelector("h2").textContent = title;
-    card.querySelector(".card-serial").textContent = place ? d.serial : unassigned ? "unassigned" : "";
-    card.dataset.unassigned = String(unassigned);
+    setText(card.querySelector("h2"), title);
+    setText(card.querySelector(".card-serial"), place ? d.serial : unassigned ? "unassigned" : "");
+    setData(card, "unassigned", String(unassigned));
     if (card.dataset.order !== order) {
       card.dataset.order = order;
       placeCard(card);
@@ -314,51 +328,55 @@
       ? `0x${address.toString(16).toUpperCase().padStart(2, "0")}` : dash;
   }
 
+  // A dial's needle (or target mark) at `degrees`, hidden without a value.
+  function showDegrees(line, degrees) {
+    if (degrees === null || degrees === undefined) {
+      setAttr(line, "visibility", "hidden");
+      if (line.hasAttribute("data-degrees")) line.removeAttribute("data-degrees");
+    } else {
+      setAttr(line, "visibility", "visible");
+      setAttr(line, "transform", `rotate(${degrees})`);
+      setData(line, "degrees", String(degrees));
+    }
+  }
+
   function fillCard(valve) {
     const d = valve.data, card = valve.card;
     // A valve whose gateway vanished may still be moving: say that nobody knows.
     const state = d.gateway_lost ? "unknown" : String(d.online);
-    card.dataset.online = state;
-    const online = el("span", { class: "online-state", "data-online": state },
-                      d.gateway_lost ? "unknown (gateway lost)" : d.online ? "online" : "offline");
+    setData(card, "online", state);
     // Two gateways report this serial online: two valves carry it, or something replays it.
     const others = d.also_reported_by || [];
-    card.dataset.contested = String(others.length > 0);
-    card.querySelector(".meta").replaceChildren(
-      `address ${hexAddress(d.address)} · gateway ${d.gateway || dash} · `, online,
-      d.boot_mode ? " · boot mode" : "",
-      ...(others.length > 0
-        ? [" · ", el("span", { class: "contested" },
-                     `also online on ${others.join(", ")}: commands but Stop refused`)]
-        : []));
-    card.querySelector(".position").textContent = fixed(d.position, 1, "°");
-    const needle = card.querySelector(".needle");
-    if (d.position === null) {
-      needle.setAttribute("visibility", "hidden");
-      needle.removeAttribute("data-degrees");
-    } else {
-      needle.setAttribute("visibility", "visible");
-      needle.setAttribute("transform", `rotate(${d.position})`);
-      needle.dataset.degrees = String(d.position);
+    setData(card, "contested", String(others.length > 0));
+    const meta = JSON.stringify([state, d.address, d.gateway, d.boot_mode, others]);
+    if (valve.shownMeta !== meta) {
+      valve.shownMeta = meta;
+      const online = el("span", { class: "online-state", "data-online": state },
+                        d.gateway_lost ? "unknown (gateway lost)" : d.online ? "online" : "offline");
+      card.querySelector(".meta").replaceChildren(
+        `address ${hexAddress(d.address)} · gateway ${d.gateway || dash} · `, online,
+        d.boot_mode ? " · boot mode" : "",
+        ...(others.length > 0
+          ? [" · ", el("span", { class: "contested" },
+                       `also online on ${others.join(", ")}: commands but Stop refused`)]
+          : []));
     }
-    const target = card.querySelector(".target");
-    if (d.target === null || d.target === undefined) {
-      target.setAttribute("visibility", "hidden");
-      target.removeAttribute("data-degrees");
-    } else {
-      target.setAttribute("visibility", "visible");
-      target.setAttribute("transform", `rotate(${d.target})`);
-      target.dataset.degrees = String(d.target);
-    }
+    setText(card.querySelector(".position"), fixed(d.position, 1, "°"));
+    showDegrees(card.querySelector(".needle"), d.position);
+    showDegrees(card.querySelector(".target"), d.target);
     for (const dd of card.querySelectorAll("dd.telemetry")) {
       const [subject, name] = dd.dataset.key.split(".");
-      dd.textContent = reading(telemetryValue(d, dd.dataset.key), protocol.telemetry[subject][name]);
+      setText(dd, reading(telemetryValue(d, dd.dataset.key), protocol.telemetry[subject][name]));
     }
-    card.querySelector("dd.target").textContent = fixed(d.target, 1, "°");
+    setText(card.querySelector("dd.target"), fixed(d.target, 1, "°"));
     const errors = d.errors || [];
-    card.querySelector(".error-list").replaceChildren(...errors.map((e) => el("li", {}, e)));
+    const shownErrors = JSON.stringify(errors);
+    if (valve.shownErrors !== shownErrors) {
+      valve.shownErrors = shownErrors;
+      card.querySelector(".error-list").replaceChildren(...errors.map((e) => el("li", {}, e)));
+    }
     const clear = card.querySelector(".clear-errors");
-    if (clear) clear.disabled = errors.length === 0;
+    if (clear && clear.disabled !== (errors.length === 0)) clear.disabled = errors.length === 0;
   }
 
   // ---- commands (built only when the snapshot allows them) -----------------------------------
@@ -560,6 +578,9 @@
   // gateways fit beside the plot. A gateway that needs a look (lost, bus not error-active)
   // unfolds by itself once; the person folds it again.
   function showGateway(g) {
+    const shown = JSON.stringify(g);
+    if (shownGateways.get(g.gateway) === shown) return;
+    shownGateways.set(g.gateway, shown);
     let panel = gateways.get(g.gateway);
     if (!panel) {
       $("gateway-list").querySelector(".empty")?.remove();
