@@ -151,7 +151,6 @@ TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
 
   // Written after both views exist, again and again: both the history a joiner gets and the
   // samples written since go through the filter.
-  const std::atomic<bool> never{false};
   for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
     ValvePresence online = presence(serial, true);
     ASSERT_TRUE((*presence_writer)->write(&online));

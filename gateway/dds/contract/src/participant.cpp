@@ -361,7 +361,7 @@ Result<DataWriter*> Participant::writer(Topic* topic, const DataWriterQos& qos,
   return writer;
 }
 
-Result<DataReader*> Participant::reader(Topic* topic, const DataReaderQos& qos,
+Result<DataReader*> Participant::reader(TopicDescription* topic, const DataReaderQos& qos,
                                         DataReaderListener* listener, const StatusMask& mask) {
   DataReader* reader = subscriber_->create_datareader(
       topic, qos, listener, listener == nullptr ? StatusMask::none() : mask);
@@ -381,9 +381,7 @@ Result<DataReader*> Participant::reader_of_serials(Topic* topic,
     if (filtered == nullptr) return refused("cannot filter " + topic->get_name() + " by serial");
     it = filtered_topics_.emplace(name, filtered).first;
   }
-  DataReader* reader = subscriber_->create_datareader(it->second, qos, nullptr, StatusMask::none());
-  if (reader == nullptr) return refused("cannot create a reader for " + name);
-  return reader;
+  return reader(it->second, qos);
 }
 
 void Participant::delete_reader(DataReader* reader) {

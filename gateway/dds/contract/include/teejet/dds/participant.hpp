@@ -146,8 +146,10 @@ class Participant {
       eprosima::fastdds::dds::DataWriterListener* listener = nullptr);
   // A listener hears only what `mask` names: data available and liveliness changed unless told
   // otherwise (a wider mask would take callbacks other parts rely on).
+  // `topic`: a Topic, or a filtered one (reader_of_serials).
   Result<eprosima::fastdds::dds::DataReader*> reader(
-      eprosima::fastdds::dds::Topic* topic, const eprosima::fastdds::dds::DataReaderQos& qos,
+      eprosima::fastdds::dds::TopicDescription* topic,
+      const eprosima::fastdds::dds::DataReaderQos& qos,
       eprosima::fastdds::dds::DataReaderListener* listener = nullptr,
       const eprosima::fastdds::dds::StatusMask& mask =
           eprosima::fastdds::dds::StatusMask::data_available()
