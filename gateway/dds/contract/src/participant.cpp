@@ -335,8 +335,25 @@ bool Participant::discovery_settled() const {
   return std::chrono::steady_clock::now() - created_ >= quiet;
 }
 
+namespace {
+
+// Fast DDS 2.9.1 deletes a writer by returning each sample of its history to the pool, the
+// writer's lock taken and released for each, before it clears the history and stops its
+// periodic heartbeat. A heartbeat that fires in between (its timer runs while a reader has not
+// acknowledged everything) walks a history whose first samples now say sequence number 0 and
+// looks for the holes between them forever, holding the writer's lock: the deletion waits for it
+// and the participant's timers (announcements, heartbeats, lease checks) stop. Upstream moved
+// the loop under the lock in 2.14. An empty history leaves the loop nothing to release.
+void empty_history(DataWriter* writer) { (void)writer->clear_history(nullptr); }
+
+}  // namespace
+
 Participant::~Participant() {
   if (participant_ == nullptr) return;
+  std::vector<DataWriter*> writers;
+  if (publisher_ != nullptr && publisher_->get_datawriters(writers)) {
+    for (DataWriter* writer : writers) empty_history(writer);
+  }
   participant_->delete_contained_entities();
   DomainParticipantFactory::get_instance()->delete_participant(participant_);
 }
@@ -391,7 +408,9 @@ void Participant::delete_reader(DataReader* reader) {
 }
 
 void Participant::delete_writer(DataWriter* writer) {
-  if (writer != nullptr) publisher_->delete_datawriter(writer);
+  if (writer == nullptr) return;
+  empty_history(writer);
+  publisher_->delete_datawriter(writer);
 }
 
 }  // namespace teejet::dds
