@@ -1,12 +1,15 @@
 // The participant lease a peer hears, as Fast DDS announces it in discovery, inside a private
 // network namespace with the loopback profile (3 s lease): a participant made with a minimum
 // lease announces at least that, one without announces the profile's, and valvectl announces
-// one that outlasts its run (docs/topics.md, "Short-lived participants").
+// one that outlasts its run; short-lived clients sit beyond the profile's initial peers and meet
+// the programs that stay, not each other (docs/topics.md, "Short-lived participants").
 
+#include <fastdds/rtps/common/PortParameters.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 
 #include <chrono>
+#include <cstdint>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -14,6 +17,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "support/eventually.hpp"
@@ -58,6 +62,10 @@ class LeaseObserver final : public eprosima::fastdds::dds::DomainParticipantList
     }
     std::lock_guard lock(mutex_);
     leases_[info.info.m_participantName.to_string()] = info.info.m_leaseDuration;
+    if (!info.info.metatraffic_locators.unicast.empty()) {
+      discovery_ports_[info.info.m_participantName.to_string()] =
+          info.info.metatraffic_locators.unicast.front().port;
+    }
   }
 
   // The lease announced by the peer called `name`, once it was met within the deadline.
@@ -73,10 +81,26 @@ class LeaseObserver final : public eprosima::fastdds::dds::DomainParticipantList
     return found;
   }
 
+  // The port the peer called `name` takes discovery traffic on, once it was met.
+  std::optional<std::uint32_t> discovery_port_of(const std::string& name) {
+    std::optional<std::uint32_t> found;
+    eventually(
+        [&] {
+          std::lock_guard lock(mutex_);
+          if (auto it = discovery_ports_.find(name); it != discovery_ports_.end()) {
+            found = it->second;
+          }
+          return found.has_value();
+        },
+        kMeetingDeadline);
+    return found;
+  }
+
  private:
   DomainParticipant* participant_ = nullptr;
   std::mutex mutex_;
   std::map<std::string, eprosima::fastrtps::Duration_t> leases_;
+  std::map<std::string, std::uint32_t> discovery_ports_;
 };
 
 TEST(ParticipantLease, AMinimumLeaseIsAnnouncedAboveTheProfilesAndNoneKeepsTheProfiles) {
@@ -161,6 +185,63 @@ TEST(ParticipantLease, ValvectlAnnouncesThirtySecondsOrTenMoreThanItsRunMayLast)
       {"--timeout", "30", "move", "TJV000001", "--to", "10", "--wait", "--wait-timeout", "60"});
   ASSERT_TRUE(waiting) << "valvectl's participant was not met";
   EXPECT_EQ(waiting->seconds, 190);
+}
+
+// The discovery (metatraffic unicast) port of participant id `id` in `domain`, by the RTPS
+// port formula with Fast DDS's default parameters.
+std::uint32_t discovery_port(int domain, int id) {
+  const eprosima::fastrtps::rtps::PortParameters ports;
+  return ports.portBase + ports.domainIDGain * static_cast<std::uint32_t>(domain) + ports.offsetd1 +
+         ports.participantIDGain * static_cast<std::uint32_t>(id);
+}
+
+// config/fastdds-loopback.xml announces to participant ids 0-31 on 127.0.0.1.
+constexpr int kLoopbackInitialPeers = 32;
+
+TEST(ParticipantRange, ShortLivedClientsMeetTheProgramsThatStayAndNotEachOther) {
+  LeaseObserver stays(test_domain());
+  ASSERT_TRUE(stays.made());
+  auto one = Participant::create(
+      {.domain = test_domain(), .name = "client-one", .outside_initial_peers = true});
+  ASSERT_TRUE(one) << one.error().reason;
+  auto two = Participant::create(
+      {.domain = test_domain(), .name = "client-two", .outside_initial_peers = true});
+  ASSERT_TRUE(two) << two.error().reason;
+
+  const auto beyond = discovery_port(test_domain(), kLoopbackInitialPeers);
+  const auto one_port = stays.discovery_port_of("client-one");
+  ASSERT_TRUE(one_port) << "the program that stays did not meet the first client";
+  EXPECT_GE(*one_port, beyond);
+  const auto two_port = stays.discovery_port_of("client-two");
+  ASSERT_TRUE(two_port) << "the program that stays did not meet the second client";
+  EXPECT_GE(*two_port, beyond);
+  EXPECT_NE(*one_port, *two_port);
+  ASSERT_TRUE(
+      eventually([&] { return (*one)->participants_met() >= 1 && (*two)->participants_met() >= 1; },
+                 kMeetingDeadline))
+      << "a client did not meet the program that stays";
+  EXPECT_EQ((*one)->participants_met(), 1u);
+  EXPECT_EQ((*two)->participants_met(), 1u);
+}
+
+// A gateway that starts while valvectl runs does not hear its first announcements: it meets
+// it at valvectl's next periodic one (every 2 s), and valvectl meets it then.
+TEST(ParticipantRange, AProgramStartedAfterAShortLivedClientMeetsIt) {
+  auto client = Participant::create({.domain = test_domain(),
+                                     .name = "client",
+                                     .minimum_lease = 30s,
+                                     .least_announcement_period = 2s,
+                                     .outside_initial_peers = true});
+  ASSERT_TRUE(client) << client.error().reason;
+  // Past Fast DDS's five initial announcements, 100 ms apart, which do reach the range.
+  std::this_thread::sleep_for(700ms);
+  auto later = Participant::create({.domain = test_domain(), .name = "started-later"});
+  ASSERT_TRUE(later) << later.error().reason;
+  EXPECT_TRUE(eventually(
+      [&] { return (*client)->participants_met() == 1 && (*later)->participants_met() == 1; },
+      kMeetingDeadline))
+      << "met: client " << (*client)->participants_met() << ", started later "
+      << (*later)->participants_met();
 }
 
 }  // namespace

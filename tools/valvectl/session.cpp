@@ -55,8 +55,9 @@ constexpr milliseconds kWatchFirstFrame{2000};
 // order), and its command writer's liveliness (2 s) reports it when it is the only commander.
 constexpr std::chrono::seconds kValvectlLease{30};
 constexpr std::chrono::seconds kLeaseBeyondTheRun{10};
-// valvectl's periodic announcement: its lease is at least 30 s, and it meets the others without
-// it (ParticipantOptions::least_announcement_period).
+// valvectl's periodic announcement: its lease is at least 30 s, and it meets the programs
+// already running without it (ParticipantOptions::least_announcement_period); one started later
+// meets it at its next, as it sits beyond the initial peers (outside_initial_peers).
 constexpr std::chrono::seconds kAnnouncement{2};
 
 std::chrono::seconds lease_for(const Invocation& invocation) {
@@ -192,7 +193,8 @@ class Session {
                                                  .profile_file = invocation_.global.profile_file,
                                                  .name = "valvectl",
                                                  .minimum_lease = lease_for(invocation_),
-                                                 .least_announcement_period = kAnnouncement});
+                                                 .least_announcement_period = kAnnouncement,
+                                                 .outside_initial_peers = true});
     if (!participant) return participant.error();
     auto view = ValveView::create(**participant, topics_for(invocation_));
     if (!view) return view.error();

@@ -1,9 +1,11 @@
 #include "teejet/dds/participant.hpp"
 
 #include <fastdds/rtps/transport/TCPTransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdlib>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
@@ -12,6 +14,7 @@
 #include <fastdds/dds/log/StdoutErrConsumer.hpp>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -240,6 +243,38 @@ void prepare_process() {
   });
 }
 
+// The first participant id whose ports the initial peers of `qos` do not reach: Fast DDS 2.9
+// announces to ids 0 up to its UDP transport's maxInitialPeersRange at an initial peer given
+// without a port. None when no such peer is given (multicast discovery, a discovery server,
+// explicit ports) or the profile sets the id itself.
+std::optional<std::int32_t> first_id_beyond_initial_peers(const DomainParticipantQos& qos) {
+  using eprosima::fastrtps::rtps::Locator_t;
+  if (qos.wire_protocol().participant_id >= 0) return std::nullopt;
+  const auto& peers = qos.wire_protocol().builtin.initialPeersList;
+  const bool ranged = std::any_of(peers.begin(), peers.end(), [](const Locator_t& peer) {
+    return (peer.kind == LOCATOR_KIND_UDPv4 || peer.kind == LOCATOR_KIND_UDPv6) && peer.port == 0;
+  });
+  if (!ranged) return std::nullopt;
+  std::uint32_t range = 0;
+  for (const auto& transport : qos.transport().user_transports) {
+    range = std::max(range, transport->maxInitialPeersRange);
+  }
+  if (qos.transport().use_builtin_transports) {
+    range =
+        std::max(range, eprosima::fastdds::rtps::UDPv4TransportDescriptor().maxInitialPeersRange);
+  }
+  return static_cast<std::int32_t>(range);
+}
+
+// A participant id beyond the initial peers' range for each such participant of this process:
+// Fast DDS refuses two participants of one process with the same id (another process's
+// participant on the id's ports moves this one to the next free id's ports).
+std::int32_t next_id_from(std::int32_t first) {
+  constexpr int kIdsPerProcess = 16;
+  static std::atomic<int> made{0};
+  return first + made.fetch_add(1) % kIdsPerProcess;
+}
+
 }  // namespace
 
 std::string participant_text(const eprosima::fastrtps::rtps::GuidPrefix_t& prefix) {
@@ -280,6 +315,11 @@ Result<std::unique_ptr<Participant>> Participant::create(const ParticipantOption
   if (!uses_tcp && options.least_announcement_period > profile_announcement &&
       to_dds_duration(options.least_announcement_period) < lease) {
     announcement = to_dds_duration(options.least_announcement_period);
+  }
+  if (options.outside_initial_peers) {
+    if (const auto first = first_id_beyond_initial_peers(qos)) {
+      qos.wire_protocol().participant_id = next_id_from(*first);
+    }
   }
   if (!options.role.empty()) {
     // Propagated: sent in the participant's discovery data, where any participant reads it.

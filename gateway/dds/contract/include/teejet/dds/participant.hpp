@@ -58,6 +58,16 @@ struct ParticipantOptions {
   // announce four times a second to every participant of the domain (the loopback profile):
   // two hundred at once would keep every CPU busy with announcements.
   std::chrono::milliseconds least_announcement_period{0};
+  // Take the ports of a participant id beyond those the profile's initial peers name (Fast DDS
+  // announces to ids 0 up to the UDP transport's maxInitialPeersRange on each initial peer
+  // without a port: 0-31 in the loopback profile). The programs that stay take the lowest free
+  // ids, inside that range, and answer this participant's announcements; other participants
+  // beyond the range never hear it, nor it them. For short-lived clients (valvectl): two hundred
+  // of them at once then meet only the programs that stay, not every other client as well, and
+  // they leave the ids in the range free for a gateway that starts while they run. Has no effect
+  // with multicast discovery, a discovery server, initial peers with explicit ports, or a profile
+  // that sets the participant id.
+  bool outside_initial_peers = false;
 };
 
 // A timeout as Fast DDS's waits take it: below zero is zero, beyond Duration_t's seconds its
