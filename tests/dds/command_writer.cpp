@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "support/eventually.hpp"
+#include "support/peer_program.hpp"
 #include "support/valve_commands.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
@@ -17,14 +17,12 @@
 
 namespace {
 
+using teejet::testing::refused;
+constexpr const char* kPeer = "command_writer";
+
 // As long as DdsPeer waits for a gateway: the tests that run this peer wait longer for "sent",
 // so they see the reason below rather than their own timeout.
 constexpr std::chrono::seconds kMatchDeadline{15};
-
-int refused(const std::string& what) {
-  std::fprintf(stderr, "command_writer: %s\n", what.c_str());
-  return 1;
-}
 
 }  // namespace
 
@@ -35,30 +33,23 @@ int main(int argc, char** argv) {
   }
   auto participant =
       teejet::dds::Participant::create({.domain = std::atoi(argv[1]), .name = "command-writer"});
-  if (!participant) return refused(participant.error().reason);
+  if (!participant) return refused(kPeer, participant.error().reason);
   auto topic = (*participant)->topic<teejet::ValveCommandPubSubType>(teejet::dds::topics::kCommand);
-  if (!topic) return refused(topic.error().reason);
+  if (!topic) return refused(kPeer, topic.error().reason);
   auto writer = (*participant)->writer(*topic, teejet::dds::topics::command_writer_qos());
-  if (!writer) return refused(writer.error().reason);
+  if (!writer) return refused(kPeer, writer.error().reason);
 
   // Wait for the gateway's reader so the command is not written into the void.
-  const bool matched = teejet::testing::eventually(
-      [&] {
-        eprosima::fastdds::dds::PublicationMatchedStatus status;
-        return (*writer)->get_publication_matched_status(status) ==
-                   eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK &&
-               status.current_count > 0;
-      },
-      kMatchDeadline);
+  const bool matched = teejet::testing::reader_matched(**writer, kMatchDeadline);
   if (!matched) {
-    return refused("no command reader matched within " + std::to_string(kMatchDeadline.count()) +
-                   " s on domain " + argv[1]);
+    return refused(kPeer, "no command reader matched within " +
+                              std::to_string(kMatchDeadline.count()) + " s on domain " + argv[1]);
   }
   auto command =
       teejet::testing::from("command-writer", 1,
                             teejet::testing::command(static_cast<std::uint32_t>(std::atoi(argv[2])),
                                                      teejet::COMMAND_MANUAL, 50));
-  if (!(*writer)->write(&command)) return refused("DDS refused to write the command");
+  if (!(*writer)->write(&command)) return refused(kPeer, "DDS refused to write the command");
   std::puts("sent");
   std::fflush(stdout);
   for (;;) pause();

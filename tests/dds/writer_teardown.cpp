@@ -14,20 +14,18 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <string>
 
-#include "support/eventually.hpp"
+#include "support/peer_program.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
 namespace {
 
+using teejet::testing::refused;
+constexpr const char* kPeer = "writer_teardown";
+
 constexpr std::chrono::seconds kMatchDeadline{15};
 constexpr std::uint32_t kValves = 4096;  // every instance a topic allows
-
-int refused(const std::string& what) {
-  std::fprintf(stderr, "writer_teardown: %s\n", what.c_str());
-  return 1;
-}
 
 }  // namespace
 
@@ -43,37 +41,31 @@ int main(int argc, char** argv) {
   eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(library);
 
   auto reading = teejet::dds::Participant::create({.domain = domain, .name = "teardown-reader"});
-  if (!reading) return refused(reading.error().reason);
+  if (!reading) return refused(kPeer, reading.error().reason);
   auto read_topic = teejet::dds::topics::topic_of<teejet::ValvePosition>(**reading);
-  if (!read_topic) return refused(read_topic.error().reason);
+  if (!read_topic) return refused(kPeer, read_topic.error().reason);
   auto reader = (*reading)->reader(*read_topic, teejet::dds::topics::state_reader_qos());
-  if (!reader) return refused(reader.error().reason);
+  if (!reader) return refused(kPeer, reader.error().reason);
 
   for (int round = 1; round <= rounds; ++round) {
     auto writing = teejet::dds::Participant::create({.domain = domain, .name = "teardown-writer"});
-    if (!writing) return refused(writing.error().reason);
+    if (!writing) return refused(kPeer, writing.error().reason);
     auto topic = teejet::dds::topics::topic_of<teejet::ValvePosition>(**writing);
-    if (!topic) return refused(topic.error().reason);
+    if (!topic) return refused(kPeer, topic.error().reason);
     auto qos = teejet::dds::topics::state_writer_qos();
     qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t{0, 1'000'000};
     auto writer = (*writing)->writer(*topic, qos);
-    if (!writer) return refused(writer.error().reason);
-    const bool matched = teejet::testing::eventually(
-        [&] {
-          eprosima::fastdds::dds::PublicationMatchedStatus status;
-          return (*writer)->get_publication_matched_status(status) ==
-                     eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK &&
-                 status.current_count > 0;
-        },
-        kMatchDeadline);
+    if (!writer) return refused(kPeer, writer.error().reason);
+    const bool matched = teejet::testing::reader_matched(**writer, kMatchDeadline);
     if (!matched)
-      return refused("the reader did not match the writer in round " + std::to_string(round));
+      return refused(kPeer,
+                     "the reader did not match the writer in round " + std::to_string(round));
     teejet::ValvePosition position;
     for (std::uint32_t serial = 1; serial <= kValves; ++serial) {
       position.serial(serial);
       position.degrees(static_cast<float>(serial % 360));
       if (!(*writer)->write(&position)) {
-        return refused("write refused in round " + std::to_string(round));
+        return refused(kPeer, "write refused in round " + std::to_string(round));
       }
     }
     writing->reset();  // the deletion under test
