@@ -44,10 +44,11 @@ cpu_ticks() { local f; read -r -a f < "/proc/$1/stat"; echo $((f[13] + f[14])); 
 "$build/gateway/app/teejet-gateway" --can sim:4 --name rig-1 > "$work/gateway.log" 2>&1 &
 gateway=$!
 pids+=("$gateway")
-# The gateway's valves are online once its own watch shows the last one.
-for _ in $(seq 1 100); do
-  if timeout 10 "$valvectl" list --wait-for 4 2>/dev/null | grep -q TJV000004; then break; fi
-done
+# The clients start once the gateway's four valves are online.
+if ! "$valvectl" --timeout 30 list --wait-for 4 > /dev/null; then
+  echo "run-many-clients.sh: the gateway's 4 valves were not listed within 30 s" >&2
+  exit 1
+fi
 gateway_before=$(cpu_ticks "$gateway")
 clients_pids=()
 for i in $(seq 1 "$clients"); do

@@ -37,7 +37,8 @@ using teejet::testing::test_domain;
 
 constexpr auto kMeetingDeadline = 10s;
 
-// A bare Fast DDS participant that writes down the lease each peer announces, by peer name.
+// A bare Fast DDS participant that writes down the lease and discovery port each peer
+// announces, by peer name.
 class LeaseObserver final : public eprosima::fastdds::dds::DomainParticipantListener {
  public:
   explicit LeaseObserver(int domain) {
@@ -60,47 +61,44 @@ class LeaseObserver final : public eprosima::fastdds::dds::DomainParticipantList
     if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) {
       return;
     }
-    std::lock_guard lock(mutex_);
-    leases_[info.info.m_participantName.to_string()] = info.info.m_leaseDuration;
+    Heard heard{.lease = info.info.m_leaseDuration, .discovery_port = 0};
     if (!info.info.metatraffic_locators.unicast.empty()) {
-      discovery_ports_[info.info.m_participantName.to_string()] =
-          info.info.metatraffic_locators.unicast.front().port;
+      heard.discovery_port = info.info.metatraffic_locators.unicast.front().port;
     }
+    std::lock_guard lock(mutex_);
+    heard_[info.info.m_participantName.to_string()] = heard;
   }
 
-  // The lease announced by the peer called `name`, once it was met within the deadline.
+  // What a peer announced in discovery.
+  struct Heard {
+    eprosima::fastrtps::Duration_t lease;
+    std::uint32_t discovery_port;  // of its discovery (metatraffic unicast) traffic; 0: none
+  };
+  // What the peer called `name` announced, once it was met within the deadline.
+  std::optional<Heard> heard_from(const std::string& name) {
+    std::optional<Heard> found;
+    eventually(
+        [&] {
+          std::lock_guard lock(mutex_);
+          if (auto it = heard_.find(name); it != heard_.end()) found = it->second;
+          return found.has_value();
+        },
+        kMeetingDeadline);
+    return found;
+  }
   std::optional<eprosima::fastrtps::Duration_t> lease_of(const std::string& name) {
-    std::optional<eprosima::fastrtps::Duration_t> found;
-    eventually(
-        [&] {
-          std::lock_guard lock(mutex_);
-          if (auto it = leases_.find(name); it != leases_.end()) found = it->second;
-          return found.has_value();
-        },
-        kMeetingDeadline);
-    return found;
+    const auto heard = heard_from(name);
+    return heard ? std::optional(heard->lease) : std::nullopt;
   }
-
-  // The port the peer called `name` takes discovery traffic on, once it was met.
   std::optional<std::uint32_t> discovery_port_of(const std::string& name) {
-    std::optional<std::uint32_t> found;
-    eventually(
-        [&] {
-          std::lock_guard lock(mutex_);
-          if (auto it = discovery_ports_.find(name); it != discovery_ports_.end()) {
-            found = it->second;
-          }
-          return found.has_value();
-        },
-        kMeetingDeadline);
-    return found;
+    const auto heard = heard_from(name);
+    return heard ? std::optional(heard->discovery_port) : std::nullopt;
   }
 
  private:
   DomainParticipant* participant_ = nullptr;
   std::mutex mutex_;
-  std::map<std::string, eprosima::fastrtps::Duration_t> leases_;
-  std::map<std::string, std::uint32_t> discovery_ports_;
+  std::map<std::string, Heard> heard_;
 };
 
 TEST(ParticipantLease, AMinimumLeaseIsAnnouncedAboveTheProfilesAndNoneKeepsTheProfiles) {
