@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <spdlog/spdlog.h>
 
+#include "teejet/gateway/bus_rate.hpp"
 #include "teejet/layout/layout_file.hpp"
 
 namespace teejet::gateway {
@@ -22,32 +23,6 @@ constexpr std::size_t kReceiveBatch = 64;
 // Batches taken without waiting before a deadline is kept: a backlog of 8 x 64 frames is longer
 // than a 32-valve bus's burst of replies.
 constexpr int kBatchesBeforeDeadlines = 8;
-// How long the bus reader counts frames before it judges the bus busy enough to coalesce.
-constexpr Duration kRatePeriod = 100ms;
-
-// Whether the bus carried at least `above` frames a second over the last period counted
-// (above 0: always). A quiet spell ends the busy judgement with the first frame after it.
-class BusRate {
- public:
-  BusRate(unsigned above, SteadyTime now) : above_(above), since_(now), busy_(above == 0) {}
-
-  void count(std::size_t frames, SteadyTime now) {
-    counted_ += frames;
-    const Duration elapsed = now - since_;
-    if (elapsed < kRatePeriod) return;
-    busy_ = above_ == 0 || static_cast<double>(counted_) >=
-                               above_ * std::chrono::duration<double>(elapsed).count();
-    counted_ = 0;
-    since_ = now;
-  }
-  bool busy() const { return busy_; }
-
- private:
-  const unsigned above_;
-  SteadyTime since_;
-  std::size_t counted_ = 0;
-  bool busy_;
-};
 
 // A layout written into the configuration stays the person's: the gateway never rewrites it.
 class LayoutInConfiguration final : public layout::LayoutStore {

@@ -23,11 +23,11 @@ struct GatewayConfig {
   std::string profile_file;
   bool stop_valves_on_exit = true;
   OnCommanderLost on_commander_lost = OnCommanderLost::kStopItsValves;
-  // On a bus this busy (frames a second, over the last tenth of a second; 0: any), while frames
-  // arrive closer together than receive_coalesce, the bus reader waits that long after a batch
-  // before taking the next one (interrupt moderation): one wake-up carries several frames.
-  // A full 500 kbit/s bus is ~3,900 frames/s; below the rate every frame wakes the reader at
-  // once. receive_coalesce 0: never. docs/performance.md has the trade.
+  // On a bus this busy (frames a second, over the last second and its last tenth; 0: any), while
+  // frames arrive closer together than receive_coalesce, the bus reader waits that long after a
+  // batch before taking the next one (interrupt moderation): one wake-up carries several frames. A
+  // full 500 kbit/s bus is ~3,900 frames/s; below the rate every frame wakes the reader at once.
+  // receive_coalesce 0: never. docs/performance.md has the trade.
   Duration receive_coalesce = std::chrono::microseconds(4000);
   unsigned receive_coalesce_above = 3000;
   // Publish every frame the gateway sends and receives on teejet/can/frame. Off: no frame
