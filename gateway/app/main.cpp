@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <csignal>
+#include <cstdlib>
 
 #include "teejet/command_line.hpp"
 #include "teejet/dds/topics.hpp"
@@ -18,6 +19,9 @@ namespace {
 
 constexpr int kExitUsage = 2;
 constexpr int kExitCannotStart = 1;
+// Fast DDS stopped working inside this process (docs/gateway.md): the valves were stopped, and a
+// supervisor restarts the gateway.
+constexpr int kExitDdsStalled = 3;
 
 // The signals that end the gateway, each through the same safe stop (docs/gateway.md). A stop
 // asked for (SIGINT, SIGTERM) exits 0; the others exit 128 + n, as a shell reports a death by
@@ -148,6 +152,14 @@ int run(const teejet::gateway::GatewayConfig& config, const sigset_t& signals) {
     return kExitUsage;
   }
   teejet::gateway::Gateway gateway(config, std::move(*backend));
+  // A participant whose event thread is stuck cannot be deleted: the safe stop would wait
+  // forever, so this one sends the Stops and ends the process without it.
+  gateway.on_dds_stalled([&gateway](teejet::Duration) {
+    spdlog::critical("stopped {} valve(s); exiting {} so that the service restarts",
+                     gateway.stop_valves(), kExitDdsStalled);
+    spdlog::shutdown();
+    std::_Exit(kExitDdsStalled);
+  });
   if (auto started = gateway.start(); !started) {
     spdlog::error("cannot start: {}", started.error().reason);
     return kExitCannotStart;

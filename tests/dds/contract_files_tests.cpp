@@ -60,8 +60,9 @@ std::set<std::string> role_topics(const std::string& role, const std::string& di
 }
 
 TEST(ContractFiles, TheGatewayRolePublishesEveryTopicButCommandsAndReadsCommandsAndStatus) {
-  EXPECT_EQ(role_topics("gateway", "publish"), every_topic_but_commands())
-      << "config/security/roles/gateway.xml";
+  auto published = every_topic_but_commands();
+  published.insert(topics::kEventWatchdog);
+  EXPECT_EQ(role_topics("gateway", "publish"), published) << "config/security/roles/gateway.xml";
   EXPECT_EQ(role_topics("gateway", "subscribe"),
             (std::set<std::string>{topics::kCommand, topics::kLayoutChange, topics::kGatewayStatus,
                                    topics::kLocation}));

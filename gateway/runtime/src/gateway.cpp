@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <spdlog/spdlog.h>
 
+#include "teejet/dds/topics.hpp"
 #include "teejet/gateway/bus_rate.hpp"
 #include "teejet/layout/layout_file.hpp"
 
@@ -69,6 +70,24 @@ Status Gateway::start() {
        }});
   if (!participant) return fail(participant.error());
   participant_ = std::move(*participant);
+  auto watchdog = dds::EventWatchdog::create(
+      *participant_,
+      {.stalled_after = dds_stalled_after_, .on_stalled = [this](Duration silent_for) {
+         spdlog::critical(
+             "Fast DDS's event thread has run no timer for {} s: this gateway's participant "
+             "hears, announces and acknowledges nothing any more (a deadlock inside Fast DDS, "
+             "docs/topics.md, \"A participant that stops\")",
+             std::chrono::duration_cast<std::chrono::seconds>(silent_for).count());
+         if (on_dds_stalled_) on_dds_stalled_(silent_for);
+       }});
+  if (watchdog) {
+    watchdog_ = std::move(*watchdog);
+  } else {
+    spdlog::warn(
+        "no watch on Fast DDS's event thread: {} (under DDS-Security, give the gateway "
+        "role publish permission for {})",
+        watchdog.error().reason, dds::topics::kEventWatchdog);
+  }
   std::set<std::string> locations;
   for (const auto& place : config_.bridge.layout.locations()) locations.insert(place.name);
   auto publisher =
@@ -126,8 +145,7 @@ void Gateway::stop() {
   }
   commands_.reset();
   if (bridge_ && config_.stop_valves_on_exit) {
-    const auto stopped = bridge_->stop_all();
-    spdlog::info("stopped {} valve(s) on exit", stopped);
+    spdlog::info("stopped {} valve(s) on exit", stop_valves());
   }
   if (reader_.joinable()) {
     reader_.request_stop();
@@ -150,6 +168,7 @@ void Gateway::stop() {
   // bus through frames_ (nothing sends or takes frames any more). The peers' reader goes first:
   // the publisher deletes it through the participant.
   if (publisher_) publisher_->stop_hearing_peers();
+  watchdog_.reset();
   participant_.reset();
   bridge_.reset();
   publisher_.reset();
@@ -162,6 +181,15 @@ void Gateway::stop() {
   frames_.reset();
   if (backend_.bus) backend_.bus->close();
   if (backend_.simulator) backend_.simulator->stop();
+}
+
+void Gateway::on_dds_stalled(std::function<void(Duration)> handler, Duration stalled_after) {
+  on_dds_stalled_ = std::move(handler);
+  dds_stalled_after_ = stalled_after;
+}
+
+std::size_t Gateway::stop_valves() {
+  return bridge_ && config_.stop_valves_on_exit ? bridge_->stop_all() : 0;
 }
 
 Duration Gateway::until(SteadyTime deadline) const {

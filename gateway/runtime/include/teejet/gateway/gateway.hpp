@@ -11,6 +11,7 @@
 #include "teejet/bridge/bridge.hpp"
 #include "teejet/can/bus.hpp"
 #include "teejet/dds/command_subscription.hpp"
+#include "teejet/dds/event_watchdog.hpp"
 #include "teejet/dds/frame_publisher.hpp"
 #include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/gateway/bus_backend.hpp"
@@ -37,6 +38,17 @@ class Gateway {
   // simulator. Idempotent.
   void stop();
 
+  // Called once, on a thread of its own, when Fast DDS's event thread of this gateway's
+  // participant has run no timer for `stalled_after` (dds/event_watchdog.hpp): the gateway then
+  // hears and announces nothing any more, and stop() would wait forever. Set before start();
+  // without one, the stall is only logged.
+  void on_dds_stalled(std::function<void(Duration silent_for)> handler,
+                      Duration stalled_after = std::chrono::seconds(30));
+
+  // Stop to every online valve, if configured (as stop() does), without touching DDS's
+  // entities; returns how many. Any thread.
+  std::size_t stop_valves();
+
   const bridge::Bridge& bridge() const { return *bridge_; }
   sim::Simulator* simulator() { return backend_.simulator.get(); }
 
@@ -52,6 +64,9 @@ class Gateway {
   const std::shared_ptr<const Clock> clock_;
   std::shared_ptr<dds::LostCommanders> lost_commanders_;
   std::unique_ptr<dds::Participant> participant_;
+  std::function<void(Duration)> on_dds_stalled_;
+  Duration dds_stalled_after_ = std::chrono::seconds(30);
+  std::unique_ptr<dds::EventWatchdog> watchdog_;  // deleted just before participant_
   std::unique_ptr<dds::GatewayPublisher> publisher_;
   std::unique_ptr<dds::FramePublisher> frames_;        // with record_frames only
   can::ObservedBus* observed_bus_ = nullptr;           // backend_.bus while frames_ observes it

@@ -1,0 +1,105 @@
+// The event watchdog (dds/event_watchdog.hpp) says when a participant's Fast DDS event thread
+// stops running timers, as the deadlock of docs/topics.md ("A participant that stops") leaves
+// it. The test holds that thread in a listener of its own instead of waiting for the race.
+
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
+#include <mutex>
+
+#include "support/eventually.hpp"
+#include "support/test_domain.hpp"
+#include "teejet/dds/event_watchdog.hpp"
+#include "teejet/dds/participant.hpp"
+
+namespace teejet::dds {
+namespace {
+
+using namespace std::chrono_literals;
+using namespace eprosima::fastdds::dds;
+using teejet::testing::eventually;
+using teejet::testing::test_domain;
+
+// Holds the event thread in its first missed-deadline callback until released.
+class HoldingListener final : public DataWriterListener {
+ public:
+  void on_offered_deadline_missed(DataWriter*, const OfferedDeadlineMissedStatus&) override {
+    std::unique_lock lock(mutex_);
+    holding_ = true;
+    changed_.notify_all();
+    changed_.wait(lock, [this] { return released_; });
+  }
+  bool holding() {
+    std::lock_guard lock(mutex_);
+    return holding_;
+  }
+  void release() {
+    std::lock_guard lock(mutex_);
+    released_ = true;
+    changed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  bool holding_ = false;
+  bool released_ = false;
+};
+
+struct Stall {
+  std::mutex mutex;
+  int reports = 0;
+  Duration silent_for{};
+};
+
+TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
+  auto participant = Participant::create({.domain = test_domain(), .name = "watched"});
+  ASSERT_TRUE(participant) << participant.error().reason;
+  auto stall = std::make_shared<Stall>();
+  auto watchdog = EventWatchdog::create(
+      **participant,
+      {.period = 100ms, .stalled_after = 2s, .on_stalled = [stall](Duration silent_for) {
+         std::lock_guard lock(stall->mutex);
+         ++stall->reports;
+         stall->silent_for = silent_for;
+       }});
+  ASSERT_TRUE(watchdog) << watchdog.error().reason;
+  ASSERT_TRUE(eventually([&] { return (*watchdog)->beats() >= 10; }, 10s))
+      << (*watchdog)->beats() << " beats";
+  {
+    std::lock_guard lock(stall->mutex);
+    EXPECT_EQ(stall->reports, 0) << "a stall reported while the event thread ran";
+  }
+
+  // A writer whose first missed deadline keeps the event thread, as the deadlock does.
+  HoldingListener holding;
+  auto topic = (*participant)->topic<ValvePositionPubSubType>("test/event_watchdog/holder");
+  ASSERT_TRUE(topic) << topic.error().reason;
+  DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
+  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  qos.deadline().period = to_dds_duration(50ms);
+  auto holder = (*participant)->writer(*topic, qos, &holding);
+  ASSERT_TRUE(holder) << holder.error().reason;
+  ValvePosition sample;
+  ASSERT_TRUE((*holder)->write(&sample));
+  ASSERT_TRUE(eventually([&] { return holding.holding(); }, 10s));
+  const auto beats_when_held = (*watchdog)->beats();
+
+  const bool reported = eventually(
+      [&] {
+        std::lock_guard lock(stall->mutex);
+        return stall->reports > 0;
+      },
+      30s);
+  holding.release();  // before anything below waits for the event thread
+  ASSERT_TRUE(reported) << "no stall reported";
+  EXPECT_LE((*watchdog)->beats(), beats_when_held + 1);
+  std::lock_guard lock(stall->mutex);
+  EXPECT_EQ(stall->reports, 1);
+  EXPECT_GE(stall->silent_for, 2s);
+}
+
+}  // namespace
+}  // namespace teejet::dds
