@@ -68,15 +68,22 @@ TEST(ContractFiles, TheGatewayRolePublishesEveryTopicButCommandsAndReadsCommands
                                    topics::kLocation}));
 }
 
+// Every role may write its own event watchdog's beat (dds/event_watchdog.hpp), which nobody reads.
 TEST(ContractFiles, TheCommanderRoleWritesCommandsAndLayoutChangesOnly) {
-  EXPECT_EQ(role_topics("commander", "publish"),
-            (std::set<std::string>{topics::kCommand, topics::kLayoutChange}));
+  EXPECT_EQ(
+      role_topics("commander", "publish"),
+      (std::set<std::string>{topics::kCommand, topics::kLayoutChange, topics::kEventWatchdog}));
 }
 
 TEST(ContractFiles, TheObserverRoleReadsEveryTopicButCommands) {
   EXPECT_EQ(role_topics("observer", "subscribe"), every_topic_but_commands())
       << "config/security/roles/observer.xml";
-  EXPECT_TRUE(role_topics("observer", "publish").empty());
+  EXPECT_EQ(role_topics("observer", "publish"), std::set<std::string>{topics::kEventWatchdog});
+}
+
+TEST(ContractFiles, TheRecorderRoleReadsEverythingAndWritesNoValveTopic) {
+  EXPECT_EQ(role_topics("recorder", "subscribe"), std::set<std::string>{"teejet/*"});
+  EXPECT_EQ(role_topics("recorder", "publish"), std::set<std::string>{topics::kEventWatchdog});
 }
 
 TEST(ContractFiles, TopicsMdTabulatesEveryTopicWithItsType) {

@@ -88,7 +88,10 @@ class Pki(unittest.TestCase):
                                   "dash": "CN=dash,OU=observer,O=farm",
                                   "gw": "CN=gw,OU=gateway,O=farm"})
         observer = permissions.split('<grant name="dash">')[1].split("</grant>")[0]
-        self.assertNotIn("<publish>", observer)
+        # An observer writes nothing but its own event watchdog's beat (docs/topics.md).
+        published = re.findall(r"<publish>([\s\S]*?)</publish>", observer)
+        self.assertEqual([re.findall(r"<topic>([^<]*)</topic>", p) for p in published],
+                         [["teejet/event_watchdog"]])
         self.assertNotIn("teejet/valve/command<", observer)
         self.assertIn("<default>DENY</default>", observer)
         # Fast DDS reads grant times in local time: a day's margin each side of the certificate.

@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <csignal>
+#include <cstdlib>
 #include <iostream>
 
 #include "info.hpp"
@@ -22,6 +23,9 @@ namespace {
 // 30 days: longer runs end by Ctrl-C or the service manager, not by a deadline.
 constexpr double kMaxDurationSeconds = 30.0 * 86400.0;
 constexpr int kExitUsage = 2;
+// Fast DDS's event thread stopped (docs/topics.md, "A participant that stops"): the file is
+// finished; a supervisor starts a new recording.
+constexpr int kExitDdsStalled = 3;
 
 constexpr const char* kFooter = R"(Examples:
   teejet-record -o run.mcap                          every teejet topic until Ctrl-C
@@ -249,6 +253,8 @@ int main(int argc, char** argv) {
   if (shown) std::cerr << '\n';
   if (!recorded) {
     std::cerr << "teejet-record: " << recorded.error().reason << '\n';
+    // The stuck participant is still there, and the exit's destructors would wait for it.
+    if (recorded.error().code == teejet::ErrorCode::kStalled) std::_Exit(kExitDdsStalled);
     return 1;
   }
   if (!quiet) print_summary(*recorded);

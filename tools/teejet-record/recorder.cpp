@@ -1,15 +1,18 @@
 #include "recorder.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <fastdds/dds/core/condition/StatusCondition.hpp>
 #include <fastdds/dds/core/condition/WaitSet.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fstream>
+#include <iostream>
 #include <memory>
 
 #include "teejet/bus_frame/bus_frame.hpp"
+#include "teejet/dds/event_watchdog.hpp"
 #include "teejet/dds/participant.hpp"
 #include "teejet/dds/tcp_rejoin.hpp"
 #include "teejet/dds/topics.hpp"
@@ -129,17 +132,39 @@ class TopicReaders {
 // The recorder's participant and its readers; made afresh when it joins again.
 struct Joined {
   std::unique_ptr<dds::Participant> participant;
-  std::unique_ptr<TopicReaders> readers;  // declared after: destroyed first
+  // Set by the watchdog when the participant's event thread stopped (docs/topics.md, "A
+  // participant that stops"): its readers may then hang in take, and deleting it waits forever.
+  std::shared_ptr<std::atomic<bool>> stalled = std::make_shared<std::atomic<bool>>(false);
+  std::unique_ptr<dds::EventWatchdog> watchdog;  // null when it could not be made
+  std::unique_ptr<TopicReaders> readers;         // declared after: destroyed first
 };
 
 Result<Joined> join(const RecorderOptions& options, const std::vector<std::string>& topics) {
+  Joined joined;
   auto participant = dds::Participant::create(
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
   if (!participant) return participant.error();
-  auto readers = TopicReaders::open(**participant, topics);
+  joined.participant = std::move(*participant);
+  auto watchdog = dds::EventWatchdog::create(
+      *joined.participant,
+      {.on_stalled = [stalled = joined.stalled](Duration) { stalled->store(true); }});
+  if (watchdog) {
+    joined.watchdog = std::move(*watchdog);
+  } else {
+    std::cerr << "teejet-record: warning: no watch on Fast DDS's event thread: "
+              << watchdog.error().reason << " (under DDS-Security, the role needs publish "
+              << "permission for " << dds::topics::kEventWatchdog << ")\n";
+  }
+  auto readers = TopicReaders::open(*joined.participant, topics);
   if (!readers) return readers.error();
-  return Joined{std::move(*participant), std::move(*readers)};
+  joined.readers = std::move(*readers);
+  return joined;
 }
+
+const Error kStalled{ErrorCode::kStalled,
+                     "Fast DDS's event thread has run no timer for 30 s (a deadlock inside Fast "
+                     "DDS, docs/topics.md, \"A participant that stops\"): the recording ends "
+                     "here, finished, with what was taken before"};
 
 // A recorder may wait long for its gateway: over TCP it joins again (dds::TcpRejoin) at most
 // this far apart.
@@ -377,6 +402,7 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
   while (!stop.load()) {
     SteadyTime now = clock.steady();
     if (now >= end) break;
+    if (joined.stalled->load()) return kStalled;
     joined.readers->wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
     const LogTimeline::Now taken_at = timeline.now();
     joined.readers->take_into(pending, taken_at);
@@ -385,10 +411,12 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
       return written;
     }
     now = clock.steady();
+    if (joined.stalled->load()) return kStalled;
     if (rejoin.replace(*joined.participant, now)) {
       // The old participant goes first: a new one that met it leaving would be in the very
       // situation that stalls it. What its readers held is pending already.
       joined.readers.reset();
+      joined.watchdog.reset();
       joined.participant.reset();
       auto again = join(options, topics);
       if (!again) return again.error();
@@ -465,11 +493,24 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
   Pending pending;
   Status recorded = record_until_stopped(*joined, *selected, recording, pending, options, stop,
                                          report, start, *clock, timeline);
-  // What the readers still hold, then everything taken.
+  const bool stalled = !recorded && recorded.error().code == ErrorCode::kStalled;
+  // What the readers still hold (a take waits for no timer), then everything taken.
   if (joined->readers) joined->readers->take_into(pending, timeline.now());
-  if (recorded) recorded = write_pending(recording, pending, UINT64_MAX);
+  if (recorded || stalled) {
+    if (auto written = write_pending(recording, pending, UINT64_MAX); !written && recorded) {
+      recorded = written;
+    }
+  }
+  if (stalled) {
+    // Left as they are: deleting them would wait for the stuck thread. The caller ends the
+    // process (kStalled).
+    (void)joined->readers.release();
+    (void)joined->watchdog.release();
+    (void)joined->participant.release();
+  }
   // Readers first: nothing arrives while the file is closed.
   joined->readers.reset();
+  joined->watchdog.reset();
   joined->participant.reset();
   const Status finished = recording.finish();
   const Progress& progress = recording.progress(clock->steady() - start);

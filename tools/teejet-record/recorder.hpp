@@ -57,6 +57,9 @@ std::string split_file_name(const std::string& output, int index);
 // Records until `stop` is set (a signal), the duration passes, or a write fails. `report` is
 // called about once a second and at the end. The file is always finished (summary, footer) when
 // this returns, also after an error.
+// ErrorCode::kStalled: the participant's Fast DDS event thread stopped (docs/topics.md, "A
+// participant that stops"); the participant is left undeleted and the caller must end the
+// process without running destructors (std::_Exit).
 Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>& stop,
                         const std::function<void(const Progress&)>& report,
                         const std::function<void()>& on_started = {});

@@ -26,7 +26,9 @@
 #include "server.hpp"
 #include "teejet/client/valve_view.hpp"
 #include "teejet/command_line.hpp"
+#include "teejet/dds/event_watchdog.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
 #include "teejet/stop_signals.hpp"
 #include "token_file.hpp"
 #include "web_assets.hpp"
@@ -37,6 +39,7 @@ using namespace teejet;
 
 constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
+constexpr int kExitDdsStalled = 3;
 // 25 Hz: smooth enough for a plot, well under a browser's 60 fps.
 constexpr auto kTickPeriod = std::chrono::milliseconds(40);
 
@@ -185,16 +188,39 @@ Result<std::filesystem::path> find_page(const Options& options) {
 // Declared in this order so that the view goes before the participant it reads through.
 struct Dds {
   std::unique_ptr<teejet::dds::Participant> participant;
+  std::unique_ptr<teejet::dds::EventWatchdog> watchdog;  // null when it could not be made
   std::unique_ptr<client::ValveView> view;
 };
+
+// A participant whose event thread is stuck (docs/topics.md, "A participant that stops") shows
+// every valve as it last was, and deleting it waits forever: the process ends instead, for its
+// supervisor to start it again. A page sees the connection drop.
+std::unique_ptr<teejet::dds::EventWatchdog> watch_event_thread(
+    teejet::dds::Participant& participant) {
+  auto watchdog = teejet::dds::EventWatchdog::create(
+      participant, {.on_stalled = [](Duration silent_for) {
+        std::cerr << "teejet-web: Fast DDS's event thread has run no timer for "
+                  << std::chrono::duration_cast<std::chrono::seconds>(silent_for).count()
+                  << " s (a deadlock inside Fast DDS, docs/topics.md, \"A participant that "
+                     "stops\"); exiting "
+                  << kExitDdsStalled << " so that the service restarts\n";
+        std::_Exit(kExitDdsStalled);
+      }});
+  if (watchdog) return std::move(*watchdog);
+  std::cerr << "teejet-web: warning: no watch on Fast DDS's event thread: "
+            << watchdog.error().reason << " (under DDS-Security, the role needs publish "
+            << "permission for " << teejet::dds::topics::kEventWatchdog << ")\n";
+  return nullptr;
+}
 
 Result<Dds> join_dds(const Options& options) {
   auto participant = teejet::dds::Participant::create(
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-web"});
   if (!participant) return participant.error();
+  auto watchdog = watch_event_thread(**participant);
   auto view = client::ValveView::create(**participant);
   if (!view) return view.error();
-  return Dds{std::move(*participant), std::move(*view)};
+  return Dds{std::move(*participant), std::move(watchdog), std::move(*view)};
 }
 
 void announce(const Options& options, const std::filesystem::path& www) {

@@ -28,6 +28,8 @@ const char* to_string(ErrorCode code) {
       return "unavailable";
     case ErrorCode::kDds:
       return "DDS error";
+    case ErrorCode::kStalled:
+      return "stalled";
   }
   return "unknown error";
 }

@@ -25,6 +25,7 @@ enum class ErrorCode {
   kSystem,       // an operating-system call failed; Error::os_error holds its errno
   kUnavailable,  // not open, already running, link down: try again when the state changes
   kDds,          // the DDS middleware refused (participant, profiles, topic, writer, reader)
+  kStalled,  // a library's thread stopped for good (a deadlock): end the process, not the object
 };
 
 const char* to_string(ErrorCode code);

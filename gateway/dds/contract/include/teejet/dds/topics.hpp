@@ -25,9 +25,10 @@ inline constexpr const char* kLayoutChange = "teejet/layout/change";
 inline constexpr const char* kLayoutChangeStatus = "teejet/layout/change_status";
 inline constexpr const char* kGatewayStatus = "teejet/gateway/status";
 inline constexpr const char* kBusFrame = "teejet/can/frame";
-// Written once by each gateway and read by nobody: its offered deadline is the beat of the
-// gateway's Fast DDS event thread (dds/event_watchdog.hpp). Not part of EverySampleType.
-inline constexpr const char* kEventWatchdog = "teejet/gateway/event_watchdog";
+// Written once by each program that stays (gateway, teejet-web, teejet-record) and read by
+// nobody: its offered deadline is the beat of the program's Fast DDS event thread
+// (dds/event_watchdog.hpp). Not part of EverySampleType.
+inline constexpr const char* kEventWatchdog = "teejet/event_watchdog";
 // Telemetry: "teejet/valve/" and the subject of the message the sample carries (the codec's
 // name of what its request asks for: position, current, cycle_counts, baud_rate, ...).
 inline constexpr std::string_view kTelemetryPrefix = "teejet/valve/";
