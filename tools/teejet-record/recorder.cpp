@@ -133,7 +133,7 @@ class TopicReaders {
 struct Joined {
   std::unique_ptr<dds::Participant> participant;
   // Set by the watchdog when the participant's event thread stopped (docs/topics.md, "A
-  // participant that stops"): its readers may then hang in take, and deleting it waits forever.
+  // participant that stops"): it hears nothing more, and deleting it waits forever.
   std::shared_ptr<std::atomic<bool>> stalled = std::make_shared<std::atomic<bool>>(false);
   std::unique_ptr<dds::EventWatchdog> watchdog;  // null when it could not be made
   std::unique_ptr<TopicReaders> readers;         // declared after: destroyed first
