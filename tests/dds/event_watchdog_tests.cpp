@@ -101,5 +101,38 @@ TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
   EXPECT_GE(stall->silent_for, 2s);
 }
 
+// A program deletes its participant with the watchdog still watching (Gateway::stop): the
+// writer goes with the participant, and a deletion that never ends would be reported.
+TEST(EventWatchdog, WatchesOnWhileItsParticipantIsDeleted) {
+  auto participant = Participant::create({.domain = test_domain(), .name = "deleted"});
+  ASSERT_TRUE(participant) << participant.error().reason;
+  auto stall = std::make_shared<Stall>();
+  auto watchdog = EventWatchdog::create(
+      **participant,
+      {.period = 100ms, .stalled_after = 2s, .on_stalled = [stall](Duration silent_for) {
+         std::lock_guard lock(stall->mutex);
+         ++stall->reports;
+         stall->silent_for = silent_for;
+       }});
+  ASSERT_TRUE(watchdog) << watchdog.error().reason;
+  ASSERT_TRUE(eventually([&] { return (*watchdog)->beats() >= 3; }, 10s));
+
+  (*watchdog)->outlive_participant();
+  participant->reset();
+  const auto beats_after = (*watchdog)->beats();
+  // No beat without the writer: to the watchdog that is a deletion that did not end.
+  EXPECT_TRUE(eventually(
+      [&] {
+        std::lock_guard lock(stall->mutex);
+        return stall->reports > 0;
+      },
+      30s))
+      << "the watchdog stopped watching when its writer went with the participant";
+  EXPECT_EQ((*watchdog)->beats(), beats_after);
+  watchdog->reset();
+  std::lock_guard lock(stall->mutex);
+  EXPECT_EQ(stall->reports, 1);
+}
+
 }  // namespace
 }  // namespace teejet::dds

@@ -117,8 +117,12 @@ Status Gateway::start() {
   } else if (config_.layout_in_config) {
     layout_store_ = std::make_unique<LayoutInConfiguration>();
   }
-  bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_,
-                                             publisher_->other_gateways(), layout_store_.get());
+  {
+    std::lock_guard lock(valves_mutex_);
+    valves_stopped_ = false;
+    bridge_ = std::make_unique<bridge::Bridge>(config_.bridge, *backend_.bus, *publisher_, clock_,
+                                               publisher_->other_gateways(), layout_store_.get());
+  }
   auto commands = dds::CommandSubscription::create(*participant_, lost_commanders_,
                                                    publisher_->answers_layout_changes());
   if (!commands) return fail(commands.error());
@@ -168,9 +172,14 @@ void Gateway::stop() {
   // bus through frames_ (nothing sends or takes frames any more). The peers' reader goes first:
   // the publisher deletes it through the participant.
   if (publisher_) publisher_->stop_hearing_peers();
-  watchdog_.reset();
+  // Watched to the end: a participant that cannot be deleted is a stall too.
+  if (watchdog_) watchdog_->outlive_participant();
   participant_.reset();
-  bridge_.reset();
+  watchdog_.reset();
+  {
+    std::lock_guard lock(valves_mutex_);
+    bridge_.reset();
+  }
   publisher_.reset();
   // The bus goes back to its unobserved self before its observer goes: a later start() finds
   // the bus as it was made.
@@ -189,7 +198,10 @@ void Gateway::on_dds_stalled(std::function<void(Duration)> handler, Duration sta
 }
 
 std::size_t Gateway::stop_valves() {
-  return bridge_ && config_.stop_valves_on_exit ? bridge_->stop_all() : 0;
+  std::lock_guard lock(valves_mutex_);
+  if (valves_stopped_ || !bridge_ || !config_.stop_valves_on_exit) return 0;
+  valves_stopped_ = true;
+  return bridge_->stop_all();
 }
 
 Duration Gateway::until(SteadyTime deadline) const {

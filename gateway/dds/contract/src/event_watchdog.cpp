@@ -56,8 +56,10 @@ EventWatchdog::~EventWatchdog() {
     wake_.notify_all();
     watcher_.join();
   }
-  participant_.delete_writer(writer_);
+  if (writer_ != nullptr) participant_.delete_writer(writer_);
 }
+
+void EventWatchdog::outlive_participant() { writer_ = nullptr; }
 
 void EventWatchdog::beat() {
   last_beat_.store(std::chrono::steady_clock::now().time_since_epoch().count());

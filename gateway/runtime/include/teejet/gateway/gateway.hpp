@@ -6,6 +6,7 @@
 // lost commanders.
 
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include "teejet/bridge/bridge.hpp"
@@ -45,8 +46,9 @@ class Gateway {
   void on_dds_stalled(std::function<void(Duration silent_for)> handler,
                       Duration stalled_after = std::chrono::seconds(30));
 
-  // Stop to every online valve, if configured (as stop() does), without touching DDS's
-  // entities; returns how many. Any thread.
+  // Stop to every online valve, if configured (as stop() does), once: a later call, or one
+  // after stop() stopped them, returns 0 and touches nothing. Without touching DDS's entities
+  // but the command statuses it writes; returns how many. Any thread.
   std::size_t stop_valves();
 
   const bridge::Bridge& bridge() const { return *bridge_; }
@@ -66,7 +68,9 @@ class Gateway {
   std::unique_ptr<dds::Participant> participant_;
   std::function<void(Duration)> on_dds_stalled_;
   Duration dds_stalled_after_ = std::chrono::seconds(30);
-  std::unique_ptr<dds::EventWatchdog> watchdog_;  // deleted just before participant_
+  std::unique_ptr<dds::EventWatchdog> watchdog_;  // deleted just after participant_
+  std::mutex valves_mutex_;                       // stop_valves() against bridge_'s reset
+  bool valves_stopped_ = false;
   std::unique_ptr<dds::GatewayPublisher> publisher_;
   std::unique_ptr<dds::FramePublisher> frames_;        // with record_frames only
   can::ObservedBus* observed_bus_ = nullptr;           // backend_.bus while frames_ observes it

@@ -39,6 +39,12 @@ class EventWatchdog {
   // Stops watching and deletes the writer (which waits for the event thread: a watchdog that
   // reported a stall must not be destroyed; the process ends instead).
   ~EventWatchdog();
+
+  // Leaves the writer to the participant's deletion and goes on watching through it: a
+  // deletion that takes `stalled_after` from the last beat is reported as a stall (the
+  // participant's deletion waits for the event thread too). Destroy the watchdog after the
+  // participant then: its writer's listener is this object.
+  void outlive_participant();
   EventWatchdog(const EventWatchdog&) = delete;
   EventWatchdog& operator=(const EventWatchdog&) = delete;
 
