@@ -508,11 +508,13 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
     (void)joined->watchdog.release();
     (void)joined->participant.release();
   }
-  // Readers first: nothing arrives while the file is closed.
+  // Readers first: nothing arrives while the file is closed. The file is finished before the
+  // participant goes: a deletion that never ends (docs/topics.md, "A participant that stops")
+  // leaves a whole file.
   joined->readers.reset();
   joined->watchdog.reset();
-  joined->participant.reset();
   const Status finished = recording.finish();
+  joined->participant.reset();
   const Progress& progress = recording.progress(clock->steady() - start);
   if (report) report(progress);
   if (!recorded) return recorded.error();
