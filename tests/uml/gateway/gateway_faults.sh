@@ -158,16 +158,24 @@ move_once() {  # SERIAL TARGET: valvectl's output and exit status on one line
 # until a command is refused, MEND it, then every command must have ended.
 link_fault() {
   local name=$1 break_it=$2 mend=$3 logged=$4 reason=$5 target=$6 mark before mended_at reply
+  local broken_at expected
   long_move "$name" "$target"
   section "$name. $break_it"
   start_loop "$name" 20 10 --wait --wait-timeout 30
   check "$name: commands complete before the fault" eventually 20 state_after "$name" 0 COMPLETED
   mark=$(lines "$watch_log")
+  broken_at=$(now)
   eval "$break_it"
   # Sent at once, before offline_after (10 s here) without I'm Here makes the valve offline.
   reply=$(move_once "${serials[2]}" 300)
+  expected="^3 .*: REJECTED: CAN send failed: vcan0: $reason"
+  # A starved machine can take longer than that to deliver it (44 s seen under a full ctest):
+  # the valve is offline by then, and that is the reason given.
+  if awk -v s="$(seconds_since "$broken_at")" 'BEGIN { exit !(s >= 10) }'; then
+    expected="$expected|^3 .*: REJECTED: valve ${serials[2]} is offline"
+  fi
   check "$name: a move sent meanwhile is REJECTED with the reason ($reply)" \
-    grep -Eq "^3 .*: REJECTED: CAN send failed: vcan0: $reason" <<<"$reply"
+    grep -Eq "$expected" <<<"$reply"
   check "$name: the gateway logs it" eventually 5 grep -q "$logged" "$gateway_log"
   check "$name: GatewayStatus bus_state down" eventually 5 status_after "$mark" down
   mended_at=$(now)
