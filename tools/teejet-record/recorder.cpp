@@ -106,10 +106,15 @@ class TopicReaders {
 
   // Moves what every reader holds into `pending`, each sample's reception time moved onto the
   // recording's timeline (a sample without one counts as received now).
-  void take_into(Pending& pending, const LogTimeline::Now& now) {
+  // The clock is read after each take, so that every sample was received before it: one
+  // received between an earlier reading and the take, across a step back of the wall clock,
+  // looked an hour old (placed 10 s back: a clock step in the file). Returns the last reading.
+  LogTimeline::Now take_into(Pending& pending, const LogTimeline& timeline) {
+    LogTimeline::Now now = timeline.now();
     for (std::size_t i = 0; i < readers_.size(); ++i) {
       taken_.clear();
       readers_[i]->take(taken_);
+      now = timeline.now();
       for (auto& sample : taken_) {
         // A gateway that stopped or was lost: its valves' last samples stay the recording's word.
         if (sample.writers_gone) continue;
@@ -117,6 +122,7 @@ class TopicReaders {
         pending.emplace(sample.received_ns, std::pair{i, std::move(sample)});
       }
     }
+    return now;
   }
 
  private:
@@ -404,8 +410,7 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
     if (now >= end) break;
     if (joined.stalled->load()) return kStalled;
     joined.readers->wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
-    const LogTimeline::Now taken_at = timeline.now();
-    joined.readers->take_into(pending, taken_at);
+    const LogTimeline::Now taken_at = joined.readers->take_into(pending, timeline);
     if (auto written = write_pending(recording, pending, taken_at.timeline - kReorderWindowNs);
         !written) {
       return written;
@@ -495,7 +500,7 @@ Result<Progress> record(const RecorderOptions& options, const std::atomic<bool>&
                                          report, start, *clock, timeline);
   const bool stalled = !recorded && recorded.error().code == ErrorCode::kStalled;
   // What the readers still hold (a take waits for no timer), then everything taken.
-  if (joined->readers) joined->readers->take_into(pending, timeline.now());
+  if (joined->readers) joined->readers->take_into(pending, timeline);
   if (recorded || stalled) {
     if (auto written = write_pending(recording, pending, UINT64_MAX); !written && recorded) {
       recorded = written;
