@@ -54,17 +54,23 @@ struct Stall {
   Duration silent_for{};
 };
 
-TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
-  auto participant = Participant::create({.domain = test_domain(), .name = "watched"});
-  ASSERT_TRUE(participant) << participant.error().reason;
-  auto stall = std::make_shared<Stall>();
-  auto watchdog = EventWatchdog::create(
-      **participant,
+// Beats every 100 ms; a stall after 2 s without one is counted in `stall`.
+Result<std::unique_ptr<EventWatchdog>> watch(Participant& participant,
+                                             std::shared_ptr<Stall> stall) {
+  return EventWatchdog::create(
+      participant,
       {.period = 100ms, .stalled_after = 2s, .on_stalled = [stall](Duration silent_for) {
          std::lock_guard lock(stall->mutex);
          ++stall->reports;
          stall->silent_for = silent_for;
        }});
+}
+
+TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
+  auto participant = Participant::create({.domain = test_domain(), .name = "watched"});
+  ASSERT_TRUE(participant) << participant.error().reason;
+  auto stall = std::make_shared<Stall>();
+  auto watchdog = watch(**participant, stall);
   ASSERT_TRUE(watchdog) << watchdog.error().reason;
   ASSERT_TRUE(eventually([&] { return (*watchdog)->beats() >= 10; }, 10s))
       << (*watchdog)->beats() << " beats";
@@ -107,13 +113,7 @@ TEST(EventWatchdog, WatchesOnWhileItsParticipantIsDeleted) {
   auto participant = Participant::create({.domain = test_domain(), .name = "deleted"});
   ASSERT_TRUE(participant) << participant.error().reason;
   auto stall = std::make_shared<Stall>();
-  auto watchdog = EventWatchdog::create(
-      **participant,
-      {.period = 100ms, .stalled_after = 2s, .on_stalled = [stall](Duration silent_for) {
-         std::lock_guard lock(stall->mutex);
-         ++stall->reports;
-         stall->silent_for = silent_for;
-       }});
+  auto watchdog = watch(**participant, stall);
   ASSERT_TRUE(watchdog) << watchdog.error().reason;
   ASSERT_TRUE(eventually([&] { return (*watchdog)->beats() >= 3; }, 10s));
 
