@@ -138,11 +138,12 @@ class TopicReaders {
 // The recorder's participant and its readers; made afresh when it joins again.
 struct Joined {
   std::unique_ptr<dds::Participant> participant;
-  // Set by the watchdog when the participant's event thread stopped (docs/topics.md, "A
-  // participant that stops"): it hears nothing more, and deleting it waits forever.
-  std::shared_ptr<std::atomic<bool>> stalled = std::make_shared<std::atomic<bool>>(false);
-  std::unique_ptr<dds::EventWatchdog> watchdog;  // null when it could not be made
-  std::unique_ptr<TopicReaders> readers;         // declared after: destroyed first
+  // Null when it could not be made. A stalled participant (docs/topics.md, "A participant that
+  // stops") hears nothing more, and deleting it waits forever.
+  std::unique_ptr<dds::EventWatchdog> watchdog;
+  std::unique_ptr<TopicReaders> readers;  // declared after: destroyed first
+
+  bool stalled() const { return watchdog && watchdog->stalled(); }
 };
 
 Result<Joined> join(const RecorderOptions& options, const std::vector<std::string>& topics) {
@@ -151,15 +152,11 @@ Result<Joined> join(const RecorderOptions& options, const std::vector<std::strin
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-record"});
   if (!participant) return participant.error();
   joined.participant = std::move(*participant);
-  auto watchdog = dds::EventWatchdog::create(
-      *joined.participant,
-      {.on_stalled = [stalled = joined.stalled](Duration) { stalled->store(true); }});
+  auto watchdog = dds::EventWatchdog::create(*joined.participant, {});
   if (watchdog) {
     joined.watchdog = std::move(*watchdog);
   } else {
-    std::cerr << "teejet-record: warning: no watch on Fast DDS's event thread: "
-              << watchdog.error().reason << " (under DDS-Security, the role needs publish "
-              << "permission for " << dds::topics::kEventWatchdog << ")\n";
+    std::cerr << "teejet-record: warning: " << watchdog.error().reason << '\n';
   }
   auto readers = TopicReaders::open(*joined.participant, topics);
   if (!readers) return readers.error();
@@ -408,7 +405,7 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
   while (!stop.load()) {
     SteadyTime now = clock.steady();
     if (now >= end) break;
-    if (joined.stalled->load()) return kStalled;
+    if (joined.stalled()) return kStalled;
     joined.readers->wait(std::min({end, now + kLongestWait, next_flush, next_report}) - now);
     const LogTimeline::Now taken_at = joined.readers->take_into(pending, timeline);
     if (auto written = write_pending(recording, pending, taken_at.timeline - kReorderWindowNs);
@@ -416,7 +413,7 @@ Status record_until_stopped(Joined& joined, const std::vector<std::string>& topi
       return written;
     }
     now = clock.steady();
-    if (joined.stalled->load()) return kStalled;
+    if (joined.stalled()) return kStalled;
     if (rejoin.replace(*joined.participant, now)) {
       // The old participant goes first: a new one that met it leaving would be in the very
       // situation that stalls it. What its readers held is pending already.

@@ -28,7 +28,6 @@
 #include "teejet/command_line.hpp"
 #include "teejet/dds/event_watchdog.hpp"
 #include "teejet/dds/participant.hpp"
-#include "teejet/dds/topics.hpp"
 #include "teejet/stop_signals.hpp"
 #include "token_file.hpp"
 #include "web_assets.hpp"
@@ -199,17 +198,12 @@ std::unique_ptr<teejet::dds::EventWatchdog> watch_event_thread(
     teejet::dds::Participant& participant) {
   auto watchdog = teejet::dds::EventWatchdog::create(
       participant, {.on_stalled = [](Duration silent_for) {
-        std::cerr << "teejet-web: Fast DDS's event thread has run no timer for "
-                  << std::chrono::duration_cast<std::chrono::seconds>(silent_for).count()
-                  << " s (a deadlock inside Fast DDS, docs/topics.md, \"A participant that "
-                     "stops\"); exiting "
-                  << kExitDdsStalled << " so that the service restarts\n";
+        std::cerr << "teejet-web: " << teejet::dds::EventWatchdog::describe(silent_for)
+                  << "; exiting " << kExitDdsStalled << " so that the service restarts\n";
         std::_Exit(kExitDdsStalled);
       }});
   if (watchdog) return std::move(*watchdog);
-  std::cerr << "teejet-web: warning: no watch on Fast DDS's event thread: "
-            << watchdog.error().reason << " (under DDS-Security, the role needs publish "
-            << "permission for " << teejet::dds::topics::kEventWatchdog << ")\n";
+  std::cerr << "teejet-web: warning: " << watchdog.error().reason << '\n';
   return nullptr;
 }
 

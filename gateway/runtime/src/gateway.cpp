@@ -3,7 +3,6 @@
 #include <pthread.h>
 #include <spdlog/spdlog.h>
 
-#include "teejet/dds/topics.hpp"
 #include "teejet/gateway/bus_rate.hpp"
 #include "teejet/layout/layout_file.hpp"
 
@@ -73,20 +72,13 @@ Status Gateway::start() {
   auto watchdog = dds::EventWatchdog::create(
       *participant_,
       {.stalled_after = dds_stalled_after_, .on_stalled = [this](Duration silent_for) {
-         spdlog::critical(
-             "Fast DDS's event thread has run no timer for {} s: this gateway's participant "
-             "hears, announces and acknowledges nothing any more (a deadlock inside Fast DDS, "
-             "docs/topics.md, \"A participant that stops\")",
-             std::chrono::duration_cast<std::chrono::seconds>(silent_for).count());
+         spdlog::critical("{}", dds::EventWatchdog::describe(silent_for));
          if (on_dds_stalled_) on_dds_stalled_(silent_for);
        }});
   if (watchdog) {
     watchdog_ = std::move(*watchdog);
   } else {
-    spdlog::warn(
-        "no watch on Fast DDS's event thread: {} (under DDS-Security, give the gateway "
-        "role publish permission for {})",
-        watchdog.error().reason, dds::topics::kEventWatchdog);
+    spdlog::warn("{}", watchdog.error().reason);
   }
   std::set<std::string> locations;
   for (const auto& place : config_.bridge.layout.locations()) locations.insert(place.name);

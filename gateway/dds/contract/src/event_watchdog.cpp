@@ -29,8 +29,13 @@ EventWatchdog::EventWatchdog(Participant& participant, EventWatchdogOptions opti
 Result<std::unique_ptr<EventWatchdog>> EventWatchdog::create(Participant& participant,
                                                              EventWatchdogOptions options) {
   std::unique_ptr<EventWatchdog> made(new EventWatchdog(participant, std::move(options)));
+  const auto refused = [](const Error& error) {
+    return Error{error.code, "no watch on Fast DDS's event thread: " + error.reason +
+                                 " (under DDS-Security, the role needs publish permission for " +
+                                 topics::kEventWatchdog + ")"};
+  };
   auto topic = participant.topic<ValvePositionPubSubType>(topics::kEventWatchdog);
-  if (!topic) return topic.error();
+  if (!topic) return refused(topic.error());
   DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
   qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
   qos.durability().kind = VOLATILE_DURABILITY_QOS;
@@ -38,12 +43,12 @@ Result<std::unique_ptr<EventWatchdog>> EventWatchdog::create(Participant& partic
   qos.history().depth = 1;
   qos.deadline().period = to_dds_duration(made->options_.period);
   auto writer = participant.writer(*topic, qos, made->listener_.get());
-  if (!writer) return writer.error();
+  if (!writer) return refused(writer.error());
   made->writer_ = *writer;
   // The deadline runs from the first write; nothing is written after it.
   ValvePosition sample;
   if (!made->writer_->write(&sample)) {
-    return Error{ErrorCode::kUnavailable, "cannot write the event watchdog's sample"};
+    return refused(Error{ErrorCode::kUnavailable, "cannot write the event watchdog's sample"});
   }
   made->watcher_ =
       std::jthread([watchdog = made.get()](std::stop_token stop) { watchdog->watch(stop); });
@@ -52,14 +57,20 @@ Result<std::unique_ptr<EventWatchdog>> EventWatchdog::create(Participant& partic
 
 EventWatchdog::~EventWatchdog() {
   if (watcher_.joinable()) {
-    watcher_.request_stop();
-    wake_.notify_all();
+    watcher_.request_stop();  // wakes the wait on wake_
     watcher_.join();
   }
   if (writer_ != nullptr) participant_.delete_writer(writer_);
 }
 
 void EventWatchdog::outlive_participant() { writer_ = nullptr; }
+
+std::string EventWatchdog::describe(Duration silent_for) {
+  return "Fast DDS's event thread has run no timer for " +
+         std::to_string(std::chrono::duration_cast<std::chrono::seconds>(silent_for).count()) +
+         " s: the participant hears, announces and acknowledges nothing any more (a deadlock "
+         "inside Fast DDS, docs/topics.md, \"A participant that stops\")";
+}
 
 void EventWatchdog::beat() {
   last_beat_.store(std::chrono::steady_clock::now().time_since_epoch().count());
@@ -74,6 +85,7 @@ void EventWatchdog::watch(std::stop_token stop) {
         std::chrono::steady_clock::duration(last_beat_.load()));
     const Duration silent_for = std::chrono::steady_clock::now() - last;
     if (silent_for >= options_.stalled_after) {
+      stalled_.store(true);
       if (options_.on_stalled) options_.on_stalled(silent_for);
       return;
     }

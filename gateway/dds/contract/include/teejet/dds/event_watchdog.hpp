@@ -17,6 +17,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "teejet/core/result.hpp"
@@ -34,8 +35,11 @@ struct EventWatchdogOptions {
 
 class EventWatchdog {
  public:
+  // An Error names the topic and, under DDS-Security, the permission it needs.
   static Result<std::unique_ptr<EventWatchdog>> create(Participant& participant,
                                                        EventWatchdogOptions options);
+  // What a program says of a stall, for its log.
+  static std::string describe(Duration silent_for);
   // Stops watching and deletes the writer (which waits for the event thread: a watchdog that
   // reported a stall must not be destroyed; the process ends instead).
   ~EventWatchdog();
@@ -49,6 +53,8 @@ class EventWatchdog {
   EventWatchdog& operator=(const EventWatchdog&) = delete;
 
   std::uint64_t beats() const { return beats_.load(); }
+  // Whether a stall was reported (set before on_stalled is called).
+  bool stalled() const { return stalled_.load(); }
 
  private:
   class Listener;
@@ -62,6 +68,7 @@ class EventWatchdog {
   std::unique_ptr<Listener> listener_;
   eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
   std::atomic<std::uint64_t> beats_{0};
+  std::atomic<bool> stalled_{false};
   std::atomic<std::chrono::steady_clock::rep> last_beat_;
   std::mutex mutex_;
   std::condition_variable_any wake_;
