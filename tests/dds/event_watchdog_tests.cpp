@@ -67,6 +67,9 @@ Result<std::unique_ptr<EventWatchdog>> watch(Participant& participant,
 }
 
 TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
+  // Outlives the participant: the event thread calls it again after release, until the
+  // writer is gone.
+  HoldingListener holding;
   auto participant = Participant::create({.domain = test_domain(), .name = "watched"});
   ASSERT_TRUE(participant) << participant.error().reason;
   auto stall = std::make_shared<Stall>();
@@ -80,7 +83,6 @@ TEST(EventWatchdog, BeatsWhileTheEventThreadRunsAndReportsOnceWhenItStops) {
   }
 
   // A writer whose first missed deadline keeps the event thread, as the deadlock does.
-  HoldingListener holding;
   auto topic = (*participant)->topic<ValvePositionPubSubType>("test/event_watchdog/holder");
   ASSERT_TRUE(topic) << topic.error().reason;
   DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
