@@ -288,6 +288,14 @@ TEST_F(BridgeTest, TargetMoveIsSentThenCompletedFromPositionTelemetry) {
   deliver(bridge, from_valve(0xD8, codec::Position{89.5}, kStart + 1000ms));  // within 1.0
   EXPECT_EQ(sink.states_of(10), (std::vector{COMMAND_ACCEPTED, COMMAND_COMPLETED}));
   EXPECT_EQ(sink.statuses().back().stamp_ns(), unix_nanoseconds(kStart + 1s));
+  // The position that completed the move goes out first: a client reading the position on
+  // COMPLETED (valvectl move --wait) shows 89.5, not 45.
+  const auto completing = sink.last_sample(1);
+  const auto completed = sink.final_status(10);
+  ASSERT_TRUE(completing && completed);
+  ASSERT_TRUE(std::holds_alternative<ValvePosition>(completing->sample));
+  EXPECT_FLOAT_EQ(std::get<ValvePosition>(completing->sample).degrees(), 89.5f);
+  EXPECT_LT(completing->sequence, completed->sequence);
 }
 
 TEST_F(BridgeTest, TargetMoveThatNeverArrivesTimesOutWithTheReason) {

@@ -19,7 +19,7 @@ std::vector<Sample> without_times(const std::vector<RecordingSink::Arrived<Sampl
 
 void RecordingSink::presence(const ValvePresence& sample) {
   std::lock_guard lock(mutex_);
-  presences_.push_back({sample, Clock::now()});
+  presences_.push_back({sample, Clock::now(), ++sequence_});
 }
 
 void RecordingSink::location(const ValveLocation& sample) {
@@ -29,7 +29,7 @@ void RecordingSink::location(const ValveLocation& sample) {
 
 void RecordingSink::telemetry(const dds::TelemetrySample& sample) {
   std::lock_guard lock(mutex_);
-  samples_.push_back({sample, Clock::now()});
+  samples_.push_back({sample, Clock::now(), ++sequence_});
 }
 
 void RecordingSink::error_cleared(std::uint32_t serial, ErrorKind kind) {
@@ -39,7 +39,7 @@ void RecordingSink::error_cleared(std::uint32_t serial, ErrorKind kind) {
 
 void RecordingSink::command_status(const CommandStatus& status) {
   std::lock_guard lock(mutex_);
-  statuses_.push_back({status, Clock::now()});
+  statuses_.push_back({status, Clock::now(), ++sequence_});
 }
 
 void RecordingSink::layout_change_status(const LayoutChangeStatus& status) {
@@ -130,6 +130,17 @@ std::optional<RecordingSink::Arrived<ValvePresence>> RecordingSink::last_presenc
   std::lock_guard lock(mutex_);
   for (auto it = presences_.rbegin(); it != presences_.rend(); ++it) {
     if (it->sample.serial() == serial) return *it;
+  }
+  return std::nullopt;
+}
+
+std::optional<RecordingSink::Arrived<dds::TelemetrySample>> RecordingSink::last_sample(
+    std::uint32_t serial) const {
+  std::lock_guard lock(mutex_);
+  for (auto it = samples_.rbegin(); it != samples_.rend(); ++it) {
+    if (std::visit([](const auto& sample) { return sample.serial(); }, it->sample) == serial) {
+      return *it;
+    }
   }
   return std::nullopt;
 }

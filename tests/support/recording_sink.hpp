@@ -25,6 +25,7 @@ class RecordingSink final : public bridge::Sink {
   struct Arrived {
     Sample sample;
     Clock::time_point at;
+    std::uint64_t sequence = 0;  // the order of presences, samples and statuses, from 1
   };
 
   void presence(const ValvePresence& sample) override;
@@ -54,11 +55,14 @@ class RecordingSink final : public bridge::Sink {
   // The final status of command `command_id` (anything but ACCEPTED), once there is one.
   std::optional<Arrived<CommandStatus>> final_status(std::uint32_t command_id) const;
   std::optional<Arrived<ValvePresence>> last_presence(std::uint32_t serial) const;
+  // The newest telemetry sample of `serial`, once there is one.
+  std::optional<Arrived<dds::TelemetrySample>> last_sample(std::uint32_t serial) const;
   // Position samples of `serial` that arrived at `since` or later.
   std::size_t positions_since(std::uint32_t serial, Clock::time_point since) const;
 
  private:
   mutable std::mutex mutex_;
+  std::uint64_t sequence_ = 0;
   std::vector<Arrived<ValvePresence>> presences_;
   std::vector<ValveLocation> locations_;
   std::vector<Arrived<dds::TelemetrySample>> samples_;

@@ -251,15 +251,17 @@ void Bridge::handle_telemetry(std::uint32_t serial, const codec::FromValveMessag
       reply->second = Awaited{clock_->steady()};
     }
   }
+  // The sample goes out before the statuses it ends: a client that reads the position (or the
+  // reply) on COMPLETED finds the one that completed the command, not the one before.
+  if (auto sample = dds::to_sample(serial, message, received)) {
+    if (const auto* error = std::get_if<ValveError>(&*sample)) {
+      latched_errors_[serial].insert(error->kind());
+    }
+    sink_.telemetry(*sample);
+  }
   Outcome outcome;
   tracker_->heard(serial, message, clock_->steady(), outcome);
   settle(outcome);
-  auto sample = dds::to_sample(serial, message, received);
-  if (!sample) return;
-  if (const auto* error = std::get_if<ValveError>(&*sample)) {
-    latched_errors_[serial].insert(error->kind());
-  }
-  sink_.telemetry(*sample);
 }
 
 std::vector<Bridge::ResentPoll> Bridge::resent_polls_of(
