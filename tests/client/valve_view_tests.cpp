@@ -173,5 +173,62 @@ TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
   EXPECT_FALSE(other->position_degrees()) << "another valve's position reached the view";
 }
 
+// A `move --wait` into a pipe shows only the final position: it follows positions once its
+// command completes, and gets the last of its valve's at once (TRANSIENT_LOCAL), no other's.
+TEST(ValveView, TelemetryFollowedLaterArrivesWithItsLastSampleForTheNamedValvesOnly) {
+  DdsPeer gateway(test_domain(), "gateway-by-hand");
+  auto presence_topic = dds::topics::topic_of<ValvePresence>(gateway.participant());
+  auto position_topic = dds::topics::topic_of<ValvePosition>(gateway.participant());
+  ASSERT_TRUE(presence_topic && position_topic);
+  auto presence_writer =
+      gateway.participant().writer(*presence_topic, dds::topics::state_writer_qos());
+  auto position_writer =
+      gateway.participant().writer(*position_topic, dds::topics::state_writer_qos());
+  ASSERT_TRUE(presence_writer && position_writer);
+  for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
+    ValvePresence online = presence(serial, true);
+    ASSERT_TRUE((*presence_writer)->write(&online));
+    ValvePosition position;
+    position.serial(serial);
+    position.degrees(serial == 0x0012'3456 ? 10.5F : 20.5F);
+    ASSERT_TRUE((*position_writer)->write(&position));
+  }
+
+  DdsPeer client(test_domain(), "client");
+  auto view = ValveView::create(client.participant(), {.everything = false});
+  ASSERT_TRUE(view) << view.error().reason;
+  const std::atomic<bool> never{false};
+  const auto until = [] { return std::chrono::steady_clock::now() + kDeadline; };
+  ASSERT_TRUE((*view)->wait_until(
+      [](const ValveTable& table) { return table.row(0x0012'3456) && table.row(0x0065'4321); },
+      until(), never));
+  EXPECT_FALSE((*view)->snapshot().row(0x0012'3456)->position_degrees()) << "followed too early";
+
+  const ViewTopics positions{
+      .everything = false, .telemetry = {"position"}, .serials = {0x0012'3456}};
+  const auto followed = (*view)->follow(positions);
+  ASSERT_TRUE(followed) << followed.error().reason;
+  ASSERT_TRUE((*view)->wait_until(
+      [](const ValveTable& table) { return table.row(0x0012'3456)->position_degrees() == 10.5; },
+      until(), never));
+  ASSERT_TRUE((*view)->follow(positions)) << "following again";
+  // A sample written since arrives too; the other valve's never does.
+  ASSERT_TRUE(teejet::testing::eventually(
+      [&] {
+        for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
+          ValvePosition position;
+          position.serial(serial);
+          position.degrees(serial == 0x0012'3456 ? 11.5F : 21.5F);
+          (*position_writer)->write(&position);
+        }
+        return (*view)->snapshot().row(0x0012'3456)->position_degrees() == 11.5;
+      },
+      kDeadline));
+  EXPECT_FALSE((*view)->snapshot().row(0x0065'4321)->position_degrees());
+  eprosima::fastdds::dds::PublicationMatchedStatus matched;
+  (*position_writer)->get_publication_matched_status(matched);
+  EXPECT_EQ(matched.current_count, 1) << "one position reader, however often followed";
+}
+
 }  // namespace
 }  // namespace teejet::client

@@ -44,6 +44,7 @@ ValveView::Reader ValveView::subscribe(
   Reader reader = reader_of(dds::topics::topic_name<Sample>(),
                             dds::topics::topic_of<Sample>(participant_), serials);
   if (reader == nullptr) return nullptr;
+  std::unique_lock handlers_lock(handlers_mutex_);
   handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
     // taking with mutex_ held would invert the lock order against a listener thread.
@@ -65,19 +66,55 @@ Result<std::unique_ptr<ValveView>> ValveView::create(dds::Participant& participa
                                                      const ViewTopics& topics) {
   std::unique_ptr<ValveView> view(new ValveView(participant, topics));
   if (view->failure_) return *view->failure_;
-  // handlers_ is complete and stays as it is: listeners may look it up from now on. Samples
-  // that arrived before a reader had its listener are taken right after. Gateway status also
-  // tells when a gateway's writers lost their liveliness or left.
-  for (const auto& [reader, handler] : view->handlers_) {
-    using eprosima::fastdds::dds::StatusMask;
-    const auto mask = reader == view->gateway_status_reader_
-                          ? StatusMask::data_available() << StatusMask::liveliness_changed()
-                                                         << StatusMask::subscription_matched()
-                          : StatusMask::data_available();
-    reader->set_listener(view.get(), mask);
-  }
-  for (const auto& [reader, handler] : view->handlers_) handler(reader);
+  std::vector<Reader> readers;
+  for (const auto& [reader, handler] : view->handlers_) readers.push_back(reader);
+  view->listen_to(readers);
   return view;
+}
+
+void ValveView::listen_to(const std::vector<Reader>& readers) {
+  // Samples that arrived before a reader had its listener are taken right after. Gateway
+  // status also tells when a gateway's writers lost their liveliness or left.
+  for (const Reader reader : readers) {
+    using eprosima::fastdds::dds::StatusMask;
+    const auto mask = reader == gateway_status_reader_ ? StatusMask::data_available()
+                                                             << StatusMask::liveliness_changed()
+                                                             << StatusMask::subscription_matched()
+                                                       : StatusMask::data_available();
+    reader->set_listener(this, mask);
+  }
+  // Without handlers_mutex_ held: taking locks the reader, and a listener thread holding that
+  // lock takes handlers_mutex_.
+  std::vector<std::pair<Reader, Handler>> taking;
+  {
+    std::shared_lock lock(handlers_mutex_);
+    for (const Reader reader : readers) taking.emplace_back(reader, handlers_.at(reader));
+  }
+  for (const auto& [reader, handler] : taking) handler(reader);
+}
+
+Status ValveView::follow(const ViewTopics& more) {
+  ViewTopics fresh{.everything = false, .serials = more.serials};
+  for (const auto& subject : more.telemetry) {
+    if (!telemetry_followed_.contains(subject)) fresh.telemetry.insert(subject);
+  }
+  if (fresh.telemetry.empty()) return {};
+  std::set<Reader> before;
+  {
+    std::shared_lock lock(handlers_mutex_);
+    for (const auto& [reader, handler] : handlers_) before.insert(reader);
+  }
+  subscribe_telemetry(std::type_identity<dds::TelemetrySample>{}, fresh);
+  std::vector<Reader> added;
+  {
+    std::shared_lock lock(handlers_mutex_);
+    for (const auto& [reader, handler] : handlers_) {
+      if (!before.contains(reader)) added.push_back(reader);
+    }
+  }
+  listen_to(added);
+  if (failure_) return *failure_;
+  return {};
 }
 
 ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
@@ -98,6 +135,7 @@ ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
   if (Reader errors = reader_of(dds::topics::kError,
                                 participant_.topic<ValveErrorPubSubType>(dds::topics::kError))) {
+    std::unique_lock handlers_lock(handlers_mutex_);
     handlers_.emplace(errors, [this](Reader from) { take_errors(from); });
   }
 }
@@ -113,6 +151,7 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
           !topics.telemetry.contains(dds::topics::telemetry_subject<Sample>())) {
         return;
       }
+      telemetry_followed_.insert(dds::topics::telemetry_subject<Sample>());
       subscribe<Sample>(
           [this](const Sample& sample, const SampleInfo&) {
             table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
@@ -153,6 +192,8 @@ void ValveView::take_errors(Reader reader) {
 }
 
 void ValveView::on_data_available(DataReader* reader) {
+  // Held while the handler runs: follow() adds to the map, never while holding mutex_.
+  std::shared_lock lock(handlers_mutex_);
   if (const auto it = handlers_.find(reader); it != handlers_.end()) it->second(reader);
 }
 

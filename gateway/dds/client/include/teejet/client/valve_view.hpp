@@ -16,6 +16,7 @@
 #include <mutex>
 #include <optional>
 #include <set>
+#include <shared_mutex>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -49,6 +50,13 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   ~ValveView() override;
   ValveView(const ValveView&) = delete;
   ValveView& operator=(const ValveView&) = delete;
+
+  // Follows the telemetry subjects of `more` too (its `everything` and errors aside), of its
+  // serials only when it names them, from now on: each gateway sends the new readers the last
+  // sample of every valve, then every new one. A subject already followed stays as it is.
+  // A client that needs a topic only at the end (a command's final position) saves the
+  // gateways sending it every sample while it waits. An Error names what DDS refused.
+  Status follow(const ViewTopics& more);
 
   ValveTable snapshot() const;
   // The gateways alone (ValveTable::gateways), without copying every valve's row.
@@ -97,6 +105,8 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
                    const std::set<std::uint32_t>& serials = {});
   template <class... Samples>
   void subscribe_telemetry(std::type_identity<std::variant<Samples...>>, const ViewTopics& topics);
+  // Gives `readers` this view as their listener and takes what arrived before it.
+  void listen_to(const std::vector<Reader>& readers);
   void take_errors(Reader reader);
   // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
   // matched count: asking it with mutex_ held would invert the lock order, so this runs first
@@ -104,8 +114,11 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   void update_gateways_matched() const;
 
   dds::Participant& participant_;
-  std::optional<Error> failure_;        // the first thing DDS refused while subscribing
-  std::map<Reader, Handler> handlers_;  // fixed after construction
+  std::optional<Error> failure_;  // the first thing DDS refused while subscribing
+  // Grows in the constructor and follow(); listener threads look their reader up in it.
+  mutable std::shared_mutex handlers_mutex_;
+  std::map<Reader, Handler> handlers_;
+  std::set<std::string> telemetry_followed_;
   Reader gateway_status_reader_ = nullptr;
 
   mutable std::mutex mutex_;
