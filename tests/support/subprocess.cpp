@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -62,17 +63,46 @@ std::vector<std::string> through_emulator(const std::vector<std::string>& argv) 
   return argv;
 }
 
+// A pseudo-terminal without line translation: {read end, the terminal}; throws when it cannot.
+std::array<int, 2> open_terminal() {
+  const int reading = ::posix_openpt(O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (reading < 0) throw system_error("posix_openpt", errno);
+  const char* name = nullptr;
+  if (::grantpt(reading) != 0 || ::unlockpt(reading) != 0 ||
+      (name = ::ptsname(reading)) == nullptr) {
+    const int error = errno;
+    ::close(reading);
+    throw system_error("pseudo-terminal", error);
+  }
+  const int terminal = ::open(name, O_RDWR | O_NOCTTY | O_CLOEXEC);
+  if (terminal < 0) {
+    const int error = errno;
+    ::close(reading);
+    throw system_error(std::string("open ") + name, error);
+  }
+  termios raw{};
+  ::tcgetattr(terminal, &raw);
+  ::cfmakeraw(&raw);
+  ::tcsetattr(terminal, TCSANOW, &raw);
+  return {reading, terminal};
+}
+
 }  // namespace
 
-Subprocess::Subprocess(const std::vector<std::string>& program_argv, Input input)
+Subprocess::Subprocess(const std::vector<std::string>& program_argv, Input input, Output output)
     : input_is_pipe_(input == Input::kPipe) {
   if (program_argv.empty()) throw std::invalid_argument("Subprocess: no program");
   const auto argv = through_emulator(program_argv);
   int in_pipe[2] = {-1, -1};
   int out_pipe[2] = {-1, -1};
   int err_pipe[2] = {-1, -1};
-  if ((input_is_pipe_ && ::pipe2(in_pipe, O_CLOEXEC) != 0) || ::pipe2(out_pipe, O_CLOEXEC) != 0 ||
-      ::pipe2(err_pipe, O_CLOEXEC) != 0) {
+  if (output == Output::kTerminal) {
+    const auto terminal = open_terminal();
+    out_pipe[0] = terminal[0];
+    out_pipe[1] = terminal[1];
+  }
+  if ((input_is_pipe_ && ::pipe2(in_pipe, O_CLOEXEC) != 0) ||
+      (out_pipe[0] < 0 && ::pipe2(out_pipe, O_CLOEXEC) != 0) || ::pipe2(err_pipe, O_CLOEXEC) != 0) {
     const int error = errno;
     for (int* fd :
          {&in_pipe[0], &in_pipe[1], &out_pipe[0], &out_pipe[1], &err_pipe[0], &err_pipe[1]}) {

@@ -24,9 +24,13 @@ class Subprocess {
  public:
   // Standard input of the child: /dev/null, or a pipe the test writes with write_input().
   enum class Input { kDevNull, kPipe };
+  // Standard output of the child: a pipe, or a terminal (a pseudo-terminal without line
+  // translation), as for a person running the program by hand.
+  enum class Output { kPipe, kTerminal };
 
   // Starts argv[0] (a path) with the test's environment; throws std::runtime_error when it cannot.
-  explicit Subprocess(const std::vector<std::string>& argv, Input input = Input::kDevNull);
+  explicit Subprocess(const std::vector<std::string>& argv, Input input = Input::kDevNull,
+                      Output output = Output::kPipe);
   ~Subprocess();  // kills a child that is still running
   Subprocess(const Subprocess&) = delete;
   Subprocess& operator=(const Subprocess&) = delete;

@@ -61,6 +61,15 @@ TEST(ValvectlCommandLine, MoveTakesSpeedDirectionAndWait) {
   EXPECT_EQ(request.command.direction(), DIRECTION_SHORTEST);
   EXPECT_TRUE(request.wait);
   EXPECT_EQ(request.wait_timeout, 90s);
+  EXPECT_FALSE(request.progress);
+}
+
+TEST(ValvectlCommandLine, ProgressIsForAWaitingMoveOrJog) {
+  EXPECT_TRUE(command_of({"move", "7", "--to", "10", "--wait", "--progress"}).progress);
+  EXPECT_TRUE(command_of({"jog", "7", "--ms", "100", "--wait", "--progress"}).progress);
+  EXPECT_NE(usage_error({"move", "7", "--to", "10", "--progress"}).find("--wait"),
+            std::string::npos);
+  usage_error({"stop", "7", "--wait", "--progress"});
 }
 
 TEST(ValvectlCommandLine, GlobalOptionsGoBeforeOrAfterTheSubcommand) {

@@ -42,7 +42,9 @@ constexpr std::uint32_t kJogged = 7;
 constexpr std::uint32_t kFaulty = 8;
 constexpr std::uint32_t kRaced = 9;
 constexpr std::uint32_t kAcknowledged = 10;
-constexpr std::uint32_t kValveCount = 10;
+constexpr std::uint32_t kMovedOnATerminal = 11;
+constexpr std::uint32_t kMovedWithProgress = 12;
+constexpr std::uint32_t kValveCount = 12;
 constexpr std::uint32_t kSilent = 999;  // announced once, then offline
 constexpr std::uint8_t kSilentAddress = 0xF0;
 
@@ -127,16 +129,64 @@ TEST_F(ValvectlEndToEnd, ListAsJsonIsAnArrayOfValveObjects) {
   EXPECT_EQ(first["gateway"], gateway_->name());
 }
 
-TEST_F(ValvectlEndToEnd, MoveWithWaitShowsProgressAndExitsZeroOnCompletion) {
+// The "TJVnnnnnn position D" lines of an output, as degrees.
+std::vector<double> positions_in(const std::string& out, const std::string& serial) {
+  std::vector<double> degrees;
+  const std::string prefix = serial + " position ";
+  for (const auto& line : split_lines(out)) {
+    if (line.rfind(prefix, 0) == 0) degrees.push_back(std::stod(line.substr(prefix.size())));
+  }
+  return degrees;
+}
+
+// Into a pipe (a script, a test rig) only the final position: following the moving position
+// would cost every gateway ten samples a second of each of its valves for this client.
+TEST_F(ValvectlEndToEnd, MoveWithWaitIntoAPipePrintsTheFinalPositionAndExitsZeroOnCompletion) {
   const auto moved = valvectl({"move", "TJV000002", "--to", "45", "--wait"});
   ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
   const auto lines = split_lines(moved.out);
-  ASSERT_GE(lines.size(), 3u) << describe(moved);
-  EXPECT_TRUE(contains(lines.front(), "TJV000002 target_degrees #")) << lines.front();
+  ASSERT_EQ(lines.size(), 3u) << describe(moved);
+  EXPECT_TRUE(contains(lines[0], "TJV000002 target_degrees #")) << lines[0];
+  EXPECT_TRUE(contains(lines[0], ": ACCEPTED")) << lines[0];
+  const auto positions = positions_in(moved.out, "TJV000002");
+  ASSERT_EQ(positions.size(), 1u) << describe(moved);
+  EXPECT_TRUE(contains(lines[1], "TJV000002 position ")) << lines[1];
+  EXPECT_NEAR(positions[0], 45.0, 1.0);
+  EXPECT_TRUE(contains(lines[2], ": COMPLETED")) << lines[2];
+  EXPECT_NEAR(gateway_->position_of(kMoved), 45.0, 1.0);
+}
+
+// --progress: a log of the move into a pipe, as on a terminal.
+TEST_F(ValvectlEndToEnd, MoveWithWaitAndProgressIntoAPipeShowsTheValveMoving) {
+  const std::string serial = codec::format_serial(kMovedWithProgress);
+  const auto moved = valvectl({"move", serial, "--to", "90", "--wait", "--progress"});
+  ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  const auto lines = split_lines(moved.out);
+  const auto positions = positions_in(moved.out, serial);
+  ASSERT_GE(positions.size(), 2u) << describe(moved);
+  EXPECT_LT(positions.front(), 80.0) << describe(moved);
+  EXPECT_NEAR(positions.back(), 90.0, 1.0);
+  EXPECT_TRUE(contains(lines.back(), ": COMPLETED")) << lines.back();
+}
+
+// On a terminal a person watches the valve move: the position as it changes, the final one
+// last before COMPLETED.
+TEST_F(ValvectlEndToEnd, MoveWithWaitOnATerminalShowsTheValveMoving) {
+  const std::string serial = codec::format_serial(kMovedOnATerminal);
+  Subprocess moving(
+      {VALVECTL_PATH, "--domain", domain_text(), "move", serial, "--to", "90", "--wait"},
+      Subprocess::Input::kDevNull, Subprocess::Output::kTerminal);
+  const auto moved = moving.wait(60s);
+  ASSERT_EQ(moved.exit_code, kExitOk) << describe(moved);
+  const auto lines = split_lines(moved.out);
+  ASSERT_GE(lines.size(), 4u) << describe(moved);
   EXPECT_TRUE(contains(lines.front(), ": ACCEPTED")) << lines.front();
   EXPECT_TRUE(contains(lines.back(), ": COMPLETED")) << lines.back();
-  EXPECT_TRUE(contains(moved.out, "TJV000002 position ")) << describe(moved);
-  EXPECT_NEAR(gateway_->position_of(kMoved), 45.0, 1.0);
+  const auto positions = positions_in(moved.out, serial);
+  ASSERT_GE(positions.size(), 2u) << describe(moved);
+  EXPECT_LT(positions.front(), 80.0) << describe(moved);
+  EXPECT_NEAR(positions.back(), 90.0, 1.0);
+  EXPECT_TRUE(contains(lines[lines.size() - 2], serial + " position ")) << describe(moved);
 }
 
 TEST_F(ValvectlEndToEnd, MoveAsJsonPrintsOneParsableObjectPerLine) {

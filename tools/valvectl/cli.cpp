@@ -48,6 +48,7 @@ struct RawArguments {
   std::string gateway;
   bool baud_request = false;
   bool wait = false;
+  bool progress = false;
   double wait_timeout_seconds = 60.0;
   double timeout_seconds = 5.0;
   int interval_ms = 1000;
@@ -151,6 +152,15 @@ void add_wait(Parser& parser, CLI::App* subcommand, const char* what) {
       ->capture_default_str();
 }
 
+// For a move or a jog, after add_wait().
+void add_progress(Parser& parser, CLI::App* subcommand) {
+  subcommand
+      ->add_flag("--progress", parser.raw.progress,
+                 "with --wait: print the position every 100 ms also into a pipe or file (on a "
+                 "terminal it always does)")
+      ->needs(subcommand->get_option("--wait"));
+}
+
 void add_drive(CLI::App* subcommand, RawArguments& raw, bool required, bool shortest) {
   auto* speed = subcommand->add_option("--speed", raw.speed, "drive speed in percent, 0 to 100")
                     ->transform(kWholeNumber);
@@ -244,7 +254,8 @@ void define(Parser& parser) {
   parser.move->add_option("--to", raw.degrees, "target position in degrees, 0 to 359.9")
       ->required();
   add_drive(parser.move, raw, /*required=*/false, /*shortest=*/true);
-  add_wait(parser, parser.move, "show the position until the move completes");
+  add_wait(parser, parser.move, "follow the move until it completes, then show its position");
+  add_progress(parser, parser.move);
 
   parser.stop = app.add_subcommand("stop", "stop a valve, or every online valve with --all");
   add_serial_or_all(parser.stop, raw);
@@ -262,6 +273,7 @@ void define(Parser& parser) {
       ->transform(kWholeNumber);
   add_drive(parser.jog, raw, /*required=*/false, /*shortest=*/false);
   add_wait(parser, parser.jog, "wait until the run time is over");
+  add_progress(parser, parser.jog);
 
   parser.clear_errors = app.add_subcommand("clear-errors", "clear a valve's latched errors");
   add_serial_or_all(parser.clear_errors, raw);
@@ -324,6 +336,7 @@ void build_command(Parser& parser, CLI::App* used) {
   ValveCommand& command = request.command;
   request.subcommand = used->get_name();
   request.wait = raw.wait;
+  request.progress = raw.progress;
   request.wait_timeout =
       seconds_option("--wait-timeout", raw.wait_timeout_seconds, kMaxWaitSeconds);
 

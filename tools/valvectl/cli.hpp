@@ -37,13 +37,14 @@ struct WatchOptions {
 
 // A valve command subcommand: the command to write to each valve and how far to follow it.
 struct CommandRequest {
-  std::string subcommand;                         // "move", for messages
-  std::vector<std::uint32_t> serials;             // the valves named on the command line
-  std::string location;                           // or the place of the valve, in a layout
-  bool every_online_valve = false;                // --all (move, stop, jog, clear-errors)
-  std::string only_gateway;                       // with --all: only this gateway's valves
-  ValveCommand command;                           // serial, command_id and origin are set per send
-  bool wait = false;                              // follow each command to its final status
+  std::string subcommand;              // "move", for messages
+  std::vector<std::uint32_t> serials;  // the valves named on the command line
+  std::string location;                // or the place of the valve, in a layout
+  bool every_online_valve = false;     // --all (move, stop, jog, clear-errors)
+  std::string only_gateway;            // with --all: only this gateway's valves
+  ValveCommand command;                // serial, command_id and origin are set per send
+  bool wait = false;                   // follow each command to its final status
+  bool progress = false;  // with wait: the moving position also into a pipe (always on a tty)
   std::chrono::milliseconds wait_timeout{60000};  // backstop when no final status arrives
 };
 

@@ -89,11 +89,22 @@ std::optional<std::string> awaited_reply(const ValveCommand& command) {
   return std::string(codec::subject(*message));
 }
 
+// Whether a waiting command shows the position as the valve moves: to a person at a terminal,
+// or when asked (--progress).
+// Every gateway sends a follower of positions each of its valves' ten a second (the serial
+// filter drops the others only on arrival, topics.md): scripts and the many commands of a test
+// rig get only the final position, read once the command completes.
+bool follows_progress(const Invocation& invocation, bool out_is_tty) {
+  const CommandRequest& request = invocation.command;
+  return invocation.subcommand == Subcommand::kCommand && request.wait &&
+         shows_progress(request.command.kind()) && (out_is_tty || request.progress);
+}
+
 // What a run follows: a list or a watch everything; a command or a layout change the directory,
 // with the position it shows while it waits and the reply it awaits, of the valves named on the
 // command line only when it names them. Each topic followed is one more sample per valve that
 // every gateway sends this client as it joins; each valve's position ten more a second to take.
-ViewTopics topics_for(const Invocation& invocation) {
+ViewTopics topics_for(const Invocation& invocation, bool out_is_tty) {
   switch (invocation.subcommand) {
     case Subcommand::kLayoutChange:
       return {.everything = false};
@@ -103,7 +114,7 @@ ViewTopics topics_for(const Invocation& invocation) {
       const CommandRequest& request = invocation.command;
       ViewTopics topics{.everything = false,
                         .serials = {request.serials.begin(), request.serials.end()}};
-      if (request.wait && shows_progress(request.command.kind())) {
+      if (follows_progress(invocation, out_is_tty)) {
         topics.telemetry.insert(dds::topics::telemetry_subject<ValvePosition>());
       }
       if (const auto reply = awaited_reply(request.command)) topics.telemetry.insert(*reply);
@@ -196,7 +207,7 @@ class Session {
                                                  .least_announcement_period = kAnnouncement,
                                                  .outside_initial_peers = true});
     if (!participant) return participant.error();
-    auto view = ValveView::create(**participant, topics_for(invocation_));
+    auto view = ValveView::create(**participant, topics_for(invocation_, terminal_.out_is_tty));
     if (!view) return view.error();
     participant_ = std::move(*participant);
     view_ = std::move(*view);
@@ -639,6 +650,7 @@ class Session {
       }
       sent.emplace_back(serial, *id);
     }
+    targets_ = {serials.begin(), serials.end()};
     int worst = kExitOk;
     for (const auto& [serial, id] : sent) worst = std::max(worst, follow(client, serial, id));
     if (terminal_.interrupted) return worst;
@@ -684,6 +696,7 @@ class Session {
     if (!request.wait) return exit_code_of(first->state());
 
     const Deadline until = after(request.wait_timeout);
+    const bool progress = follows_progress(invocation_, terminal_.out_is_tty);
     std::optional<double> shown_position;
     CommandStatus latest = *first;
     while (latest.state() == COMMAND_ACCEPTED) {
@@ -693,6 +706,7 @@ class Session {
         latest = *status;
         // The final position goes before the final status, which stays the last line.
         if (latest.state() == COMMAND_COMPLETED && shows_progress(request.command.kind())) {
+          if (!progress) show_final_position(serial);
           show_position(serial, shown_position);
         }
         emit(status_text(latest), status_json(latest));
@@ -707,7 +721,7 @@ class Session {
                  codec::format_serial(serial) + " within " + seconds_text(request.wait_timeout));
         return kExitTimedOut;
       }
-      if (shows_progress(request.command.kind())) show_position(serial, shown_position);
+      if (progress) show_position(serial, shown_position);
     }
     if (latest.state() == COMMAND_COMPLETED) print_reply(serial, first->stamp_ns());
     return exit_code_of(latest.state());
@@ -726,6 +740,25 @@ class Session {
         return kExitSuperseded;
     }
     return kExitFailure;
+  }
+
+  // Follows the targets' positions from now on (once), and waits for `serial`'s.
+  void show_final_position(std::uint32_t serial) {
+    const auto position = dds::topics::telemetry_subject<ValvePosition>();
+    if (const auto followed =
+            view_->follow({.everything = false, .telemetry = {position}, .serials = targets_});
+        !followed) {
+      complain("cannot read positions: " + followed.error().reason);
+      return;
+    }
+    const auto known = [serial](const ValveTable& table) {
+      const auto row = table.row(serial);
+      return row && row->position_degrees();
+    };
+    if (!wait_until(known, after_timeout()) && !terminal_.interrupted) {
+      complain("no position from " + codec::format_serial(serial) + " within " +
+               seconds_text(invocation_.global.timeout) + " of its completion");
+    }
   }
 
   void show_position(std::uint32_t serial, std::optional<double>& shown) {
@@ -762,6 +795,7 @@ class Session {
   const Deadline run_ends_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<ValveView> view_;  // destroyed before the participant: its readers go first
+  std::set<std::uint32_t> targets_;  // the valves a command was sent to
   dds::TcpRejoin rejoin_;
 };
 
