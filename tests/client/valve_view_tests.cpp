@@ -128,22 +128,63 @@ TEST(ValveView, AViewOfSomeTelemetryNeitherSubscribesToNorShowsTheRest) {
   EXPECT_FALSE((*lean)->snapshot().row(0x0012'3456)->temperature_c());
 }
 
+constexpr std::uint32_t kOwn = 0x0012'3456;    // the valve a view names
+constexpr std::uint32_t kOther = 0x0065'4321;  // and one it does not
+
+// A gateway played by hand that publishes the presence and position of kOwn and kOther.
+class PositionGateway {
+ public:
+  PositionGateway() {
+    auto presence_topic = dds::topics::topic_of<ValvePresence>(peer_.participant());
+    auto position_topic = dds::topics::topic_of<ValvePosition>(peer_.participant());
+    if (!presence_topic || !position_topic) return;
+    auto presence = peer_.participant().writer(*presence_topic, dds::topics::state_writer_qos());
+    auto position = peer_.participant().writer(*position_topic, dds::topics::state_writer_qos());
+    if (presence && position) {
+      presence_writer_ = *presence;
+      position_writer = *position;
+    }
+  }
+  bool ready() const { return presence_writer_ != nullptr && position_writer != nullptr; }
+  bool announce() {
+    for (const std::uint32_t serial : {kOwn, kOther}) {
+      ValvePresence online = presence(serial, true);
+      if (!presence_writer_->write(&online)) return false;
+    }
+    return true;
+  }
+  // kOwn at `own` degrees, kOther 10 degrees further.
+  bool write_positions(float own) {
+    bool written = true;
+    for (const std::uint32_t serial : {kOwn, kOther}) {
+      ValvePosition position;
+      position.serial(serial);
+      position.degrees(serial == kOwn ? own : own + 10.0F);
+      written = position_writer->write(&position) && written;
+    }
+    return written;
+  }
+
+  eprosima::fastdds::dds::DataWriter* position_writer = nullptr;
+
+ private:
+  DdsPeer peer_{test_domain(), "gateway-by-hand"};
+  eprosima::fastdds::dds::DataWriter* presence_writer_ = nullptr;
+};
+
+bool shows_position(const ValveView& view, std::uint32_t serial, double degrees) {
+  const auto row = view.snapshot().row(serial);
+  return row && row->position_degrees() == degrees;
+}
+
 // `valvectl move TJV… --wait` follows the position of its own valve only: the others arrive and
 // are dropped by a serial filter before they reach the table (dds/serial_filter.hpp).
 TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
-  DdsPeer gateway(test_domain(), "gateway-by-hand");
-  auto presence_topic = dds::topics::topic_of<ValvePresence>(gateway.participant());
-  auto position_topic = dds::topics::topic_of<ValvePosition>(gateway.participant());
-  ASSERT_TRUE(presence_topic && position_topic);
-  auto presence_writer =
-      gateway.participant().writer(*presence_topic, dds::topics::state_writer_qos());
-  auto position_writer =
-      gateway.participant().writer(*position_topic, dds::topics::state_writer_qos());
-  ASSERT_TRUE(presence_writer && position_writer);
+  PositionGateway gateway;
+  ASSERT_TRUE(gateway.ready());
   DdsPeer client(test_domain(), "client");
-  auto view =
-      ValveView::create(client.participant(),
-                        {.everything = false, .telemetry = {"position"}, .serials = {0x0012'3456}});
+  auto view = ValveView::create(
+      client.participant(), {.everything = false, .telemetry = {"position"}, .serials = {kOwn}});
   ASSERT_TRUE(view) << view.error().reason;
   DdsPeer full_client(test_domain(), "full-client");
   auto full = ValveView::create(full_client.participant());
@@ -151,24 +192,14 @@ TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
 
   // Written after both views exist, again and again: both the history a joiner gets and the
   // samples written since go through the filter.
-  for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
-    ValvePresence online = presence(serial, true);
-    ASSERT_TRUE((*presence_writer)->write(&online));
-  }
+  ASSERT_TRUE(gateway.announce());
   ASSERT_TRUE(teejet::testing::eventually(
       [&] {
-        for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
-          ValvePosition position;
-          position.serial(serial);
-          position.degrees(serial == 0x0012'3456 ? 10.5F : 20.5F);
-          (*position_writer)->write(&position);
-        }
-        const auto seen = (*full)->snapshot().row(0x0065'4321);
-        const auto own = (*view)->snapshot().row(0x0012'3456);
-        return seen && seen->position_degrees() == 20.5 && own && own->position_degrees() == 10.5;
+        gateway.write_positions(10.5F);
+        return shows_position(**full, kOther, 20.5) && shows_position(**view, kOwn, 10.5);
       },
       kDeadline));
-  const auto other = (*view)->snapshot().row(0x0065'4321);
+  const auto other = (*view)->snapshot().row(kOther);
   ASSERT_TRUE(other) << "presence is not filtered";
   EXPECT_FALSE(other->position_degrees()) << "another valve's position reached the view";
 }
@@ -176,23 +207,10 @@ TEST(ValveView, AViewOfSomeValvesShowsTheirTelemetryAndNoOthers) {
 // A `move --wait` into a pipe shows only the final position: it follows positions once its
 // command completes, and gets the last of its valve's at once (TRANSIENT_LOCAL), no other's.
 TEST(ValveView, TelemetryFollowedLaterArrivesWithItsLastSampleForTheNamedValvesOnly) {
-  DdsPeer gateway(test_domain(), "gateway-by-hand");
-  auto presence_topic = dds::topics::topic_of<ValvePresence>(gateway.participant());
-  auto position_topic = dds::topics::topic_of<ValvePosition>(gateway.participant());
-  ASSERT_TRUE(presence_topic && position_topic);
-  auto presence_writer =
-      gateway.participant().writer(*presence_topic, dds::topics::state_writer_qos());
-  auto position_writer =
-      gateway.participant().writer(*position_topic, dds::topics::state_writer_qos());
-  ASSERT_TRUE(presence_writer && position_writer);
-  for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
-    ValvePresence online = presence(serial, true);
-    ASSERT_TRUE((*presence_writer)->write(&online));
-    ValvePosition position;
-    position.serial(serial);
-    position.degrees(serial == 0x0012'3456 ? 10.5F : 20.5F);
-    ASSERT_TRUE((*position_writer)->write(&position));
-  }
+  PositionGateway gateway;
+  ASSERT_TRUE(gateway.ready());
+  ASSERT_TRUE(gateway.announce());
+  ASSERT_TRUE(gateway.write_positions(10.5F));
 
   DdsPeer client(test_domain(), "client");
   auto view = ValveView::create(client.participant(), {.everything = false});
@@ -200,33 +218,27 @@ TEST(ValveView, TelemetryFollowedLaterArrivesWithItsLastSampleForTheNamedValvesO
   const std::atomic<bool> never{false};
   const auto until = [] { return std::chrono::steady_clock::now() + kDeadline; };
   ASSERT_TRUE((*view)->wait_until(
-      [](const ValveTable& table) { return table.row(0x0012'3456) && table.row(0x0065'4321); },
-      until(), never));
-  EXPECT_FALSE((*view)->snapshot().row(0x0012'3456)->position_degrees()) << "followed too early";
+      [](const ValveTable& table) { return table.row(kOwn) && table.row(kOther); }, until(),
+      never));
+  EXPECT_FALSE((*view)->snapshot().row(kOwn)->position_degrees()) << "followed too early";
 
-  const ViewTopics positions{
-      .everything = false, .telemetry = {"position"}, .serials = {0x0012'3456}};
+  const ViewTopics positions{.everything = false, .telemetry = {"position"}, .serials = {kOwn}};
   const auto followed = (*view)->follow(positions);
   ASSERT_TRUE(followed) << followed.error().reason;
   ASSERT_TRUE((*view)->wait_until(
-      [](const ValveTable& table) { return table.row(0x0012'3456)->position_degrees() == 10.5; },
-      until(), never));
+      [](const ValveTable& table) { return table.row(kOwn)->position_degrees() == 10.5; }, until(),
+      never));
   ASSERT_TRUE((*view)->follow(positions)) << "following again";
   // A sample written since arrives too; the other valve's never does.
   ASSERT_TRUE(teejet::testing::eventually(
       [&] {
-        for (const std::uint32_t serial : {0x0012'3456u, 0x0065'4321u}) {
-          ValvePosition position;
-          position.serial(serial);
-          position.degrees(serial == 0x0012'3456 ? 11.5F : 21.5F);
-          (*position_writer)->write(&position);
-        }
-        return (*view)->snapshot().row(0x0012'3456)->position_degrees() == 11.5;
+        gateway.write_positions(11.5F);
+        return shows_position(**view, kOwn, 11.5);
       },
       kDeadline));
-  EXPECT_FALSE((*view)->snapshot().row(0x0065'4321)->position_degrees());
+  EXPECT_FALSE((*view)->snapshot().row(kOther)->position_degrees());
   eprosima::fastdds::dds::PublicationMatchedStatus matched;
-  (*position_writer)->get_publication_matched_status(matched);
+  gateway.position_writer->get_publication_matched_status(matched);
   EXPECT_EQ(matched.current_count, 1) << "one position reader, however often followed";
 }
 
