@@ -90,10 +90,9 @@ std::optional<std::string> awaited_reply(const ValveCommand& command) {
 }
 
 // Whether a waiting command shows the position as the valve moves: to a person at a terminal,
-// or when asked (--progress).
-// Every gateway sends a follower of positions each of its valves' ten a second (the serial
-// filter drops the others only on arrival, topics.md): scripts and the many commands of a test
-// rig get only the final position, read once the command completes.
+// or when asked (--progress). Every gateway sends a follower of positions each of its valves'
+// ten a second (the serial filter drops the others only on arrival, topics.md): scripts and the
+// many commands of a test rig get only the final position, read once the command completes.
 bool follows_progress(const Invocation& invocation, bool out_is_tty) {
   const CommandRequest& request = invocation.command;
   return invocation.subcommand == Subcommand::kCommand && request.wait &&

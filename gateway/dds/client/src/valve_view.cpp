@@ -99,20 +99,7 @@ Status ValveView::follow(const ViewTopics& more) {
     if (!telemetry_followed_.contains(subject)) fresh.telemetry.insert(subject);
   }
   if (fresh.telemetry.empty()) return {};
-  std::set<Reader> before;
-  {
-    std::shared_lock lock(handlers_mutex_);
-    for (const auto& [reader, handler] : handlers_) before.insert(reader);
-  }
-  subscribe_telemetry(std::type_identity<dds::TelemetrySample>{}, fresh);
-  std::vector<Reader> added;
-  {
-    std::shared_lock lock(handlers_mutex_);
-    for (const auto& [reader, handler] : handlers_) {
-      if (!before.contains(reader)) added.push_back(reader);
-    }
-  }
-  listen_to(added);
+  listen_to(subscribe_telemetry(std::type_identity<dds::TelemetrySample>{}, fresh));
   if (failure_) return *failure_;
   return {};
 }
@@ -141,10 +128,11 @@ ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
 }
 
 template <class... Samples>
-void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>,
-                                    const ViewTopics& topics) {
+std::vector<ValveView::Reader> ValveView::subscribe_telemetry(
+    std::type_identity<std::variant<Samples...>>, const ViewTopics& topics) {
   // Every telemetry topic alike, as the codec's messages; errors are instances of their own.
-  const auto one = [this, &topics](auto identity) {
+  std::vector<Reader> made;
+  const auto one = [this, &topics, &made](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
       if (!topics.everything &&
@@ -152,14 +140,18 @@ void ValveView::subscribe_telemetry(std::type_identity<std::variant<Samples...>>
         return;
       }
       telemetry_followed_.insert(dds::topics::telemetry_subject<Sample>());
-      subscribe<Sample>(
-          [this](const Sample& sample, const SampleInfo&) {
-            table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
-          },
-          topics.everything ? std::set<std::uint32_t>{} : topics.serials);
+      if (Reader reader = subscribe<Sample>(
+              [this](const Sample& sample, const SampleInfo&) {
+                table_.on_telemetry(sample.serial(), dds::from_sample(sample),
+                                    sample.received_ns());
+              },
+              topics.everything ? std::set<std::uint32_t>{} : topics.serials)) {
+        made.push_back(reader);
+      }
     }
   };
   (one(std::type_identity<Samples>{}), ...);
+  return made;
 }
 
 ValveView::~ValveView() {

@@ -103,8 +103,10 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
       const std::set<std::uint32_t>& serials = {});
   Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic,
                    const std::set<std::uint32_t>& serials = {});
+  // The readers it made (those DDS refused set failure_).
   template <class... Samples>
-  void subscribe_telemetry(std::type_identity<std::variant<Samples...>>, const ViewTopics& topics);
+  std::vector<Reader> subscribe_telemetry(std::type_identity<std::variant<Samples...>>,
+                                          const ViewTopics& topics);
   // Gives `readers` this view as their listener and takes what arrived before it.
   void listen_to(const std::vector<Reader>& readers);
   void take_errors(Reader reader);
