@@ -2,6 +2,7 @@
 
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <utility>
 #include <vector>
 
 #include "teejet/dds/conversions.hpp"
@@ -104,11 +105,25 @@ Status ValveView::follow(const ViewTopics& more) {
   return {};
 }
 
+void ValveView::stop_following_presence() {
+  Reader reader = nullptr;
+  {
+    std::unique_lock lock(handlers_mutex_);
+    reader = std::exchange(presence_reader_, nullptr);
+    if (reader == nullptr) return;
+    handlers_.erase(reader);
+  }
+  // Deleted without handlers_mutex_ held: a listener thread may hold the reader's lock while
+  // it waits for that mutex, and finds no handler once it has it.
+  participant_.delete_reader(reader);
+}
+
 ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
     : participant_(participant) {
-  subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
-    table_.on_presence(sample, dds::participant_of(info.publication_handle));
-  });
+  presence_reader_ =
+      subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
+        table_.on_presence(sample, dds::participant_of(info.publication_handle));
+      });
   gateway_status_reader_ =
       subscribe<GatewayStatus>([this](const GatewayStatus& sample, const SampleInfo& info) {
         table_.on_gateway_status(sample, dds::participant_of(info.publication_handle));

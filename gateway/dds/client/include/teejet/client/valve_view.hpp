@@ -57,6 +57,10 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   // A client that needs a topic only at the end (a command's final position) saves the
   // gateways sending it every sample while it waits. An Error names what DDS refused.
   Status follow(const ViewTopics& more);
+  // Stops following valve presence; the rows stay as they last were. Every gateway sends a
+  // follower each of its valves' I'm Here, once a second: a client that has found the valves it
+  // commands and waits for their statuses saves them that (and itself the wake-ups).
+  void stop_following_presence();
 
   ValveTable snapshot() const;
   // The gateways alone (ValveTable::gateways), without copying every valve's row.
@@ -122,6 +126,7 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   std::map<Reader, Handler> handlers_;
   std::set<std::string> telemetry_followed_;
   Reader gateway_status_reader_ = nullptr;
+  Reader presence_reader_ = nullptr;  // guarded by handlers_mutex_ after the constructor
 
   mutable std::mutex mutex_;
   mutable std::condition_variable changed_;
