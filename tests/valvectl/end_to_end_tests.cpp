@@ -44,7 +44,8 @@ constexpr std::uint32_t kRaced = 9;
 constexpr std::uint32_t kAcknowledged = 10;
 constexpr std::uint32_t kMovedOnATerminal = 11;
 constexpr std::uint32_t kMovedWithProgress = 12;
-constexpr std::uint32_t kValveCount = 12;
+constexpr std::uint32_t kDrivenWhileWaiting = 13;
+constexpr std::uint32_t kValveCount = 13;
 constexpr std::uint32_t kSilent = 999;  // announced once, then offline
 constexpr std::uint8_t kSilentAddress = 0xF0;
 
@@ -399,6 +400,26 @@ TEST_F(ValvectlEndToEnd, ANewerCommandSupersedesAWaitingMove) {
   EXPECT_EQ(replaced.exit_code, kExitSuperseded) << describe(replaced);
   EXPECT_TRUE(contains(split_lines(replaced.out).back(), ": SUPERSEDED: replaced by command"))
       << describe(replaced);
+}
+
+// Every gateway sends each client that follows presence every valve's I'm Here once a second: a
+// hundred clients waiting for their commands' statuses filled the gateways' sockets. Once a
+// command has found its valve, valvectl stops following presence for the rest of its wait.
+TEST_F(ValvectlEndToEnd, AWaitingCommandStopsFollowingPresenceOnceItFoundItsValve) {
+  const int others = gateway_->presence_readers();
+  const std::string serial = codec::format_serial(kDrivenWhileWaiting);
+  // At 1 % of 90 °/s the move takes 100 s: valvectl waits for its completion all along.
+  Subprocess waiting({VALVECTL_PATH, "--domain", domain_text(), "move", serial, "--to", "90",
+                      "--speed", "1", "--wait", "--wait-timeout", "120"});
+  // Its presence reader matched the gateway's writer before it could find the valve.
+  ASSERT_TRUE(waiting.wait_for_stdout(": ACCEPTED", 15s)) << waiting.err();
+  EXPECT_TRUE(eventually([&] { return gateway_->presence_readers() == others; }, 10s))
+      << gateway_->presence_readers() - others << " presence reader(s) of valvectl left";
+  waiting.signal(SIGINT);
+  const auto interrupted = waiting.wait(15s);
+  EXPECT_EQ(interrupted.exit_code, kExitInterrupted) << describe(interrupted);
+  const auto stopped = valvectl({"stop", serial});
+  EXPECT_EQ(stopped.exit_code, kExitOk) << describe(stopped);
 }
 
 TEST_F(ValvectlEndToEnd, AMoveGoesOnAfterValvectlExitsWithoutWait) {

@@ -1,10 +1,12 @@
 #include "observed_gateway.hpp"
 
+#include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <stdexcept>
 
 #include "teejet/codec/codec.hpp"
+#include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/dds/topics.hpp"
 #include "teejet/valvePubSubTypes.h"
 
@@ -75,6 +77,12 @@ void ObservedGateway::on_data_available(eprosima::fastdds::dds::DataReader* read
 std::vector<CommandStatus> ObservedGateway::commands() const {
   std::lock_guard lock(mutex_);
   return commands_;
+}
+
+int ObservedGateway::presence_readers() const {
+  eprosima::fastdds::dds::PublicationMatchedStatus matched;
+  gateway_->publisher().presence_writer()->get_publication_matched_status(matched);
+  return matched.current_count;
 }
 
 double ObservedGateway::position_of(std::uint32_t serial) {

@@ -41,6 +41,8 @@ class ObservedGateway : eprosima::fastdds::dds::DataReaderListener {
   // The commands the gateway accepted or rejected, in order (one per command id). Commands for
   // serials it does not know leave no status: bridge().counters().commands_ignored counts them.
   std::vector<CommandStatus> commands() const;
+  // The readers the gateway sends its valves' presence to (every client following it).
+  int presence_readers() const;
   // A simulated valve's exact position now.
   double position_of(std::uint32_t serial);
 

@@ -628,6 +628,10 @@ class Session {
     // Every gateway that owns one of the valves must hear the command: its own reader, not
     // just as many readers as there are owners.
     const ValveTable table = view_->snapshot();
+    // Found: the directory has told what it had to. Followed on, every gateway would send this
+    // client each of its valves' I'm Here once a second for as long as it waits, and a hundred
+    // waiting clients overflowed the gateways' sockets on two cores (docs/performance.md).
+    view_->stop_following_presence();
     std::set<std::string> owners;
     for (const std::uint32_t serial : serials) owners.insert(table.row(serial)->participant);
     owners.erase(std::string{});

@@ -52,6 +52,7 @@ class Gateway {
   std::size_t stop_valves();
 
   const bridge::Bridge& bridge() const { return *bridge_; }
+  const dds::GatewayPublisher& publisher() const { return *publisher_; }
   sim::Simulator* simulator() { return backend_.simulator.get(); }
 
  private:

@@ -106,6 +106,11 @@ class GatewayPublisher final : public bridge::Sink {
   // gateway answer them: it then neither takes them (a warning says what to grant).
   bool answers_layout_changes() const { return layout_status_ready_; }
 
+  // Whom the valves' presence goes to: its matched readers are the clients that follow it.
+  eprosima::fastdds::dds::DataWriter* presence_writer() const {
+    return state_.writer<ValvePresence>();
+  }
+
   // What the other gateways report (nullptr when their status cannot be read): for the bridge,
   // which refuses commands to a serial that another gateway reports online too.
   const bridge::OtherGateways* other_gateways() const { return peers_.get(); }
