@@ -653,9 +653,11 @@ class Session {
       }
       sent.emplace_back(serial, *id);
     }
-    targets_ = {serials.begin(), serials.end()};
+    const std::set<std::uint32_t> sent_to(serials.begin(), serials.end());
     int worst = kExitOk;
-    for (const auto& [serial, id] : sent) worst = std::max(worst, follow(client, serial, id));
+    for (const auto& [serial, id] : sent) {
+      worst = std::max(worst, follow(client, serial, id, sent_to));
+    }
     if (terminal_.interrupted) return worst;
     // Exiting deletes the writer, and with it the commands a late reader has yet to repair.
     // Asked-for readers (a recorder that must hold every command) get the whole --timeout.
@@ -684,8 +686,9 @@ class Session {
   }
 
   // Prints the command's statuses up to the first one (or, with --wait, the final one) and
-  // returns what they mean as an exit status.
-  int follow(CommandClient& client, std::uint32_t serial, std::uint32_t id) {
+  // returns what they mean as an exit status; `targets` are all the valves the command went to.
+  int follow(CommandClient& client, std::uint32_t serial, std::uint32_t id,
+             const std::set<std::uint32_t>& targets) {
     const CommandRequest& request = invocation_.command;
     const auto first = client.next_status(id, after_timeout());
     if (!first) {
@@ -709,7 +712,7 @@ class Session {
         latest = *status;
         // The final position goes before the final status, which stays the last line.
         if (latest.state() == COMMAND_COMPLETED && shows_progress(request.command.kind())) {
-          if (!progress) show_final_position(serial);
+          if (!progress) show_final_position(serial, targets);
           show_position(serial, shown_position);
         }
         emit(status_text(latest), status_json(latest));
@@ -746,10 +749,10 @@ class Session {
   }
 
   // Follows the targets' positions from now on (once), and waits for `serial`'s.
-  void show_final_position(std::uint32_t serial) {
+  void show_final_position(std::uint32_t serial, const std::set<std::uint32_t>& targets) {
     const auto position = dds::topics::telemetry_subject<ValvePosition>();
     if (const auto followed =
-            view_->follow({.everything = false, .telemetry = {position}, .serials = targets_});
+            view_->follow({.everything = false, .telemetry = {position}, .serials = targets});
         !followed) {
       complain("cannot read positions: " + followed.error().reason);
       return;
@@ -798,7 +801,6 @@ class Session {
   const Deadline run_ends_;
   std::unique_ptr<dds::Participant> participant_;
   std::unique_ptr<ValveView> view_;  // destroyed before the participant: its readers go first
-  std::set<std::uint32_t> targets_;  // the valves a command was sent to
   dds::TcpRejoin rejoin_;
 };
 
