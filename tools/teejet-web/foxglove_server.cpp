@@ -312,8 +312,9 @@ class Connection final : public std::enable_shared_from_this<Connection> {
         return TokenGuard::reason(answer);
       };
       SentIds sent(server.sender);
-      const auto answer = foxglove::answer_publish(
-          request, server.view.snapshot(), server.options.policy, self->token_, sent, check_token);
+      const auto answer =
+          foxglove::answer_publish(request, server.sender.directory(), server.options.policy,
+                                   self->token_, sent, check_token);
       asio::post(server.io, [self, answer, ids = std::move(sent.commands)] {
         self->session.outbox.post_status(foxglove::status(answer.level, answer.message));
         self->write_next();

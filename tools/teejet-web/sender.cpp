@@ -117,6 +117,15 @@ Targets DdsSender::targets() {
 
 // Connects on the first command: a read-only dashboard never announces a command writer.
 // Under its own lock, so that ticks go on while discovery takes its time.
+client::ValveTable DdsSender::directory() {
+  if (!directory_awaited_.exchange(true)) {
+    const std::atomic<bool> never{false};
+    view_.wait_until([](const client::ValveTable& table) { return table.directory_complete(); },
+                     Clock::now() + kConnectTimeout, never);
+  }
+  return view_.snapshot();
+}
+
 Result<client::CommandClient*> DdsSender::connected() {
   std::lock_guard connecting(connect_mutex_);
   {

@@ -4,6 +4,7 @@
 // statuses are followed for the ticks, and for the targets of teejet-web's own moves; and how
 // its layout changes reach the gateways: through a LayoutClient, likewise followed.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -43,6 +44,12 @@ class DdsSender final : public CommandSender {
 
   Targets targets();
 
+  // The table a command is checked against. The first call waits up to 5 s for the directory
+  // to be complete (every gateway met has told its valves and places): a command that comes as
+  // teejet-web starts is not refused for a valve it has yet to hear of. Later calls do not wait,
+  // whether it completed or not.
+  client::ValveTable directory();
+
  private:
   Result<client::CommandClient*> connected();
   std::vector<CommandStatus> take_command_statuses();
@@ -50,6 +57,7 @@ class DdsSender final : public CommandSender {
 
   dds::Participant& participant_;
   client::ValveView& view_;
+  std::atomic<bool> directory_awaited_{false};
   std::mutex connect_mutex_;
   std::mutex mutex_;
   std::unique_ptr<client::CommandClient> client_;

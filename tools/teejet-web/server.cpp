@@ -431,7 +431,8 @@ class PageSession final : public ServedPage, public std::enable_shared_from_this
       if (answer.verdict == TokenGuard::Verdict::kAccepted) return std::nullopt;
       return TokenGuard::reason(answer);
     };
-    return handle_page_message(text, server_.view.snapshot(), server_.policy, sender, check_token);
+    return handle_page_message(text, server_.sender.directory(), server_.policy, sender,
+                               check_token);
   }
 
   void write_next() {
