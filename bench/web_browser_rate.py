@@ -6,7 +6,9 @@ settles, then measures for --seconds on the page's own WebSocket (wrapped before
 runs, so the count is independent of the page's code): update messages per second, valve entries
 per second, bytes per second, the gap between updates (p50/p99/max) and the delay from the
 server's stamp_ms to the browser's receipt (same host clock); plus the page's own
-window.teejetDashboard.stats (frames painted) and the CPU of Chromium's processes.
+window.teejetDashboard.stats (frames painted), the browser's own main-thread time for each frame
+that shows a change (script, style, layout and paint: p50/p99/max), the frames over 50 ms
+whatever their cause (Long Animation Frames), and the CPU of Chromium's processes.
 Run it inside the bench's network namespace (bench/run-web-bench.sh), never on the host.
 """
 
@@ -37,12 +39,55 @@ WRAP = r"""
       s.delays.push(now - message.stamp_ms);
       if (s.last) s.gaps.push(now - s.last);
       s.last = now;
+      s.measureNextFrame();
     });
     return ws;
   }
   Wrapped.prototype = Native.prototype;
   for (const k of ['CONNECTING', 'OPEN', 'CLOSING', 'CLOSED']) Wrapped[k] = Native[k];
   window.WebSocket = Wrapped;
+
+  // The browser's own time per frame that shows a change: from the start of the frame's
+  // animation frame callbacks (ours first: it is asked for when an update arrives, before the
+  // page's handler writes it, and before each of the page's own) to the first task after that
+  // frame, which runs once the browser has done its script, style, layout and paint on the main
+  // thread. A frame is asked for only where the page changes something anyway.
+  s.frames = [];
+  s.longFrames = 0;
+  s.longestFrame = 0;
+  const nativeFrame = window.requestAnimationFrame.bind(window);
+  const after = new MessageChannel();
+  let frameStart = null;
+  let measuring = false;
+  after.port1.onmessage = () => {
+    if (frameStart !== null && s.on) s.frames.push(performance.now() - frameStart);
+    frameStart = null;
+    measuring = false;
+  };
+  s.measureNextFrame = () => {
+    if (!s.on || measuring) return;
+    measuring = true;
+    nativeFrame(() => {
+      frameStart = performance.now();
+      after.port2.postMessage(0);
+    });
+  };
+  window.requestAnimationFrame = (callback) => {
+    s.measureNextFrame();
+    return nativeFrame(callback);
+  };
+  // Frames over 50 ms, whoever caused them (Long Animation Frames).
+  if ((PerformanceObserver.supportedEntryTypes || []).includes('long-animation-frame')) {
+    new PerformanceObserver((list) => {
+      if (!s.on) return;
+      for (const entry of list.getEntries()) {
+        s.longFrames += 1;
+        s.longestFrame = Math.max(s.longestFrame, entry.duration);
+      }
+    }).observe({type: 'long-animation-frame'});
+  } else {
+    s.longFrames = null;
+  }
 })();
 """
 
@@ -101,7 +146,10 @@ def main():
         elapsed = time.monotonic() - start
         chromium1 = cpu_ticks_of({"chromium", "chrome"})
         page1 = driver.execute_script("return window.teejetDashboard && window.teejetDashboard.stats")
-        s = driver.execute_script("return window.__webBench")
+        s = driver.execute_script(
+            "const s = window.__webBench; return {updates: s.updates, valves: s.valves, "
+            "bytes: s.bytes, gaps: s.gaps, delays: s.delays, frames: s.frames, "
+            "longFrames: s.longFrames, longestFrame: s.longestFrame}")
         cards = len(driver.find_elements("css selector", "[data-serial]"))
     finally:
         driver.quit()
@@ -115,7 +163,11 @@ def main():
           f"gap_ms_max={max(s['gaps'] or [float('nan')]):.1f} "
           f"delay_ms_p50={quantile(s['delays'], 0.5):.1f} delay_ms_p99={quantile(s['delays'], 0.99):.1f} "
           f"delay_ms_max={max(s['delays'] or [float('nan')]):.1f} "
-          f"frames_painted={painted} "
+          f"frames_painted={painted} frames_measured={len(s['frames'])} "
+          f"frame_ms_p50={quantile(s['frames'], 0.5):.1f} frame_ms_p99={quantile(s['frames'], 0.99):.1f} "
+          f"frame_ms_max={max(s['frames'] or [float('nan')]):.1f} "
+          f"long_frames={'n/a' if s['longFrames'] is None else s['longFrames']} "
+          f"long_frame_ms_max={s['longestFrame']:.1f} "
           f"chromium_cpu={100 * (chromium1 - chromium0) / hz / elapsed:.1f}%")
     return 0 if s["updates"] > 0 and cards >= args.valves else 1
 
