@@ -8,6 +8,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -406,15 +407,15 @@ TEST_F(ValvectlEndToEnd, ANewerCommandSupersedesAWaitingMove) {
 // hundred clients waiting for their commands' statuses filled the gateways' sockets. Once a
 // command has found its valve, valvectl stops following presence for the rest of its wait.
 TEST_F(ValvectlEndToEnd, AWaitingCommandStopsFollowingPresenceOnceItFoundItsValve) {
-  const int others = gateway_->presence_readers();
+  const int others = gateway_->readers_of<ValvePresence>();
   const std::string serial = codec::format_serial(kDrivenWhileWaiting);
   // At 1 % of 90 °/s the move takes 100 s: valvectl waits for its completion all along.
   Subprocess waiting({VALVECTL_PATH, "--domain", domain_text(), "move", serial, "--to", "90",
                       "--speed", "1", "--wait", "--wait-timeout", "120"});
   // Its presence reader matched the gateway's writer before it could find the valve.
   ASSERT_TRUE(waiting.wait_for_stdout(": ACCEPTED", 15s)) << waiting.err();
-  EXPECT_TRUE(eventually([&] { return gateway_->presence_readers() == others; }, 10s))
-      << gateway_->presence_readers() - others << " presence reader(s) of valvectl left";
+  EXPECT_TRUE(eventually([&] { return gateway_->readers_of<ValvePresence>() == others; }, 10s))
+      << gateway_->readers_of<ValvePresence>() - others << " presence reader(s) of valvectl left";
   waiting.signal(SIGINT);
   const auto interrupted = waiting.wait(15s);
   EXPECT_EQ(interrupted.exit_code, kExitInterrupted) << describe(interrupted);
@@ -498,6 +499,15 @@ TEST_F(ValvectlEndToEnd, LatchedErrorsShowInTheListUntilCleared) {
         20s);
   };
   ASSERT_TRUE(error_listed(R"(["high_voltage"])"));
+  // The table too: a text list follows the errors, though only its columns' telemetry.
+  const auto table = valvectl({"list"});
+  ASSERT_EQ(table.exit_code, kExitOk) << describe(table);
+  const auto lines = split_lines(table.out);
+  const auto faulty = std::find_if(lines.begin(), lines.end(), [](const std::string& line) {
+    return line.rfind(codec::format_serial(kFaulty), 0) == 0;
+  });
+  ASSERT_NE(faulty, lines.end()) << table.out;
+  EXPECT_TRUE(contains(*faulty, "high_voltage")) << *faulty;
   const auto cleared = valvectl({"clear-errors", "8", "--wait"});
   ASSERT_EQ(cleared.exit_code, kExitOk) << describe(cleared);
   EXPECT_TRUE(contains(cleared.out, "TJV000008 clear_errors #")) << cleared.out;
@@ -541,6 +551,29 @@ TEST_F(ValvectlEndToEnd, WatchAsTextPrintsATablePerRefreshWithoutScreenControlIn
                        "gateway " + gateway_->name() + " on sim:" + std::to_string(kValveCount)));
   EXPECT_TRUE(contains(watched.out, "SERIAL     ADDR  ONLINE"));
   EXPECT_FALSE(contains(watched.out, "\x1b["));
+}
+
+// The table shows position, temperature and voltage: a text watch or list follows only those
+// (and the errors), and every gateway sends it seven samples fewer per valve as it joins, and
+// no current, speed or other reply the table would not show.
+TEST_F(ValvectlEndToEnd, AWatchAsTextFollowsOnlyTheTelemetryItsTableShows) {
+  const int positions = gateway_->readers_of<ValvePosition>();
+  const int errors = gateway_->readers_of<ValveError>();
+  const int currents = gateway_->readers_of<ValveCurrent>();
+  Subprocess watching({VALVECTL_PATH, "--domain", domain_text(), "watch", "--interval", "100"});
+  ASSERT_TRUE(watching.wait_for_stdout(codec::format_serial(kValveCount), 15s));
+  EXPECT_TRUE(eventually(
+      [&] {
+        return gateway_->readers_of<ValvePosition>() == positions + 1 &&
+               gateway_->readers_of<ValveError>() == errors + 1;
+      },
+      10s));
+  EXPECT_EQ(gateway_->readers_of<ValveCurrent>(), currents);
+  watching.signal(SIGINT);
+  const auto watched = watching.wait(15s);
+  EXPECT_EQ(watched.exit_code, kExitOk) << describe(watched);
+  // Its table is whole: position, temperature and voltage of TJV000001.
+  EXPECT_TRUE(contains(watched.out, "0.0      25   12.0  -")) << watched.out;
 }
 
 TEST_F(ValvectlEndToEnd, WatchEndsByItselfAfterItsDuration) {

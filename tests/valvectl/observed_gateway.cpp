@@ -79,12 +79,6 @@ std::vector<CommandStatus> ObservedGateway::commands() const {
   return commands_;
 }
 
-int ObservedGateway::presence_readers() const {
-  eprosima::fastdds::dds::PublicationMatchedStatus matched;
-  gateway_->publisher().presence_writer()->get_publication_matched_status(matched);
-  return matched.current_count;
-}
-
 double ObservedGateway::position_of(std::uint32_t serial) {
   auto& sim = simulator();
   const auto now = sim.clock()->steady();

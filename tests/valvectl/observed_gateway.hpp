@@ -5,6 +5,7 @@
 // through the command statuses it publishes, and a valve that announces itself once and falls
 // silent.
 
+#include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <memory>
 #include <mutex>
@@ -13,6 +14,7 @@
 
 #include "support/dds_peer.hpp"
 #include "teejet/can/virtual_bus.hpp"
+#include "teejet/dds/gateway_publisher.hpp"
 #include "teejet/gateway/gateway.hpp"
 
 namespace teejet::testing {
@@ -41,8 +43,13 @@ class ObservedGateway : eprosima::fastdds::dds::DataReaderListener {
   // The commands the gateway accepted or rejected, in order (one per command id). Commands for
   // serials it does not know leave no status: bridge().counters().commands_ignored counts them.
   std::vector<CommandStatus> commands() const;
-  // The readers the gateway sends its valves' presence to (every client following it).
-  int presence_readers() const;
+  // The readers the gateway sends Sample's topic to (every client following it).
+  template <class Sample>
+  int readers_of() const {
+    eprosima::fastdds::dds::PublicationMatchedStatus matched;
+    gateway_->publisher().writer_of<Sample>()->get_publication_matched_status(matched);
+    return matched.current_count;
+  }
   // A simulated valve's exact position now.
   double position_of(std::uint32_t serial);
 

@@ -99,12 +99,17 @@ bool follows_progress(const Invocation& invocation, bool out_is_tty) {
          shows_progress(request.command.kind()) && (out_is_tty || request.progress);
 }
 
-// What a run follows: a list or a watch everything; a command or a layout change the directory,
-// with the position it shows while it waits and the reply it awaits, of the valves named on the
-// command line only when it names them. Each topic followed is one more sample per valve that
-// every gateway sends this client as it joins; each valve's position ten more a second to take.
+// What a run follows: a list or a watch the columns it prints and the errors (everything into
+// JSON); a command or a layout change the directory, with the position it shows while it waits
+// and the reply it awaits, of the valves named on the command line only when it names them.
+// Each topic followed is one more sample per valve that every gateway sends this client as it
+// joins; each valve's position ten more a second to take.
 ViewTopics topics_for(const Invocation& invocation, bool out_is_tty) {
   switch (invocation.subcommand) {
+    case Subcommand::kList:
+    case Subcommand::kWatch:
+      if (invocation.global.json) return {};
+      return {.everything = false, .telemetry = column_subjects(), .errors = true};
     case Subcommand::kLayoutChange:
       return {.everything = false};
     case Subcommand::kIdentify:

@@ -37,6 +37,8 @@ std::optional<int> ValveRow::temperature_c() const {
 
 std::optional<double> ValveRow::volts() const { return number_in(reply("voltage"), "volts"); }
 
+std::set<std::string> column_subjects() { return {"position", "temperature", "voltage"}; }
+
 ValveTable::Entry& ValveTable::entry(std::uint32_t serial) {
   Entry& found = rows_[serial];
   found.row.serial = serial;

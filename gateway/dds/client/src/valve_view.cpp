@@ -132,7 +132,7 @@ ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
     table_.on_location(sample, dds::participant_of(info.publication_handle));
   });
   subscribe_telemetry(std::type_identity<dds::TelemetrySample>{}, topics);
-  if (!topics.everything) return;
+  if (!topics.everything && !topics.errors) return;
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
   if (Reader errors = reader_of(dds::topics::kError,

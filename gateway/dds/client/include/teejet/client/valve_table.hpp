@@ -46,12 +46,16 @@ struct ValveRow {
   std::set<ErrorKind> errors;                           // latched, until Clear Errors
   std::map<std::string, Reply, std::less<>> telemetry;  // by subject, the latest of each
 
-  // The values `list` shows in columns, from the telemetry.
+  // The values `list` shows in columns, from the telemetry (the subjects of column_subjects()).
   std::optional<double> position_degrees() const;
   std::optional<int> temperature_c() const;  // the valve's own, not its angle sensor's
   std::optional<double> volts() const;
   const Reply* reply(std::string_view subject) const;  // nullptr before the first
 };
+
+// The telemetry subjects ValveRow's columns come from: a client that shows only those (a text
+// list or watch) need follow no other.
+std::set<std::string> column_subjects();
 
 struct GatewaySummary {
   std::string name;

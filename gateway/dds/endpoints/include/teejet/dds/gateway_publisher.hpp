@@ -106,9 +106,14 @@ class GatewayPublisher final : public bridge::Sink {
   // gateway answer them: it then neither takes them (a warning says what to grant).
   bool answers_layout_changes() const { return layout_status_ready_; }
 
-  // Whom the valves' presence goes to: its matched readers are the clients that follow it.
-  eprosima::fastdds::dds::DataWriter* presence_writer() const {
-    return state_.writer<ValvePresence>();
+  // The writer of Sample's topic: its matched readers are the clients that follow it.
+  template <class Sample>
+  eprosima::fastdds::dds::DataWriter* writer_of() const {
+    if constexpr (kIsAlternative<Sample, TelemetrySample>) {
+      return telemetry_.writer<Sample>();
+    } else {
+      return state_.writer<Sample>();
+    }
   }
 
   // What the other gateways report (nullptr when their status cannot be read): for the bridge,
