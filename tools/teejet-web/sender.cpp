@@ -115,8 +115,6 @@ Targets DdsSender::targets() {
   return tracker_.targets();
 }
 
-// Connects on the first command: a read-only dashboard never announces a command writer.
-// Under its own lock, so that ticks go on while discovery takes its time.
 client::ValveTable DdsSender::directory() {
   if (!directory_awaited_.exchange(true)) {
     const std::atomic<bool> never{false};
@@ -126,6 +124,8 @@ client::ValveTable DdsSender::directory() {
   return view_.snapshot();
 }
 
+// Connects on the first command: a read-only dashboard never announces a command writer.
+// Under its own lock, so that ticks go on while discovery takes its time.
 Result<client::CommandClient*> DdsSender::connected() {
   std::lock_guard connecting(connect_mutex_);
   {

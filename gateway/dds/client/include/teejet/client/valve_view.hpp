@@ -37,7 +37,7 @@ using Deadline = std::chrono::steady_clock::time_point;
 struct ViewTopics {
   bool everything = true;           // every telemetry topic and the errors
   std::set<std::string> telemetry;  // otherwise only these subjects ("position")
-  bool errors = false;              // and, otherwise, the errors only when set
+  bool errors = false;              // with `telemetry`: the errors too
   // With `telemetry`: only these valves' samples of it (empty: every valve's); the others are
   // dropped as they arrive (dds/serial_filter.hpp). Presence stays whole.
   std::set<std::uint32_t> serials;
