@@ -301,7 +301,8 @@ class Connection final : public std::enable_shared_from_this<Connection> {
   // Answered on the commands thread, the status queued back here; the sender keeps the
   // command's statuses for the page's ticks until that answer is out.
   void publish(foxglove::Publish request) {
-    asio::post(server_.commands, [self = shared_from_this(), request = std::move(request)] {
+    asio::post(server_.commands, [self = shared_from_this(),
+                                  request = std::move(request)]() mutable {
       auto& server = self->server_;
       const auto check_token = [&](std::string_view token) -> std::optional<std::string> {
         const auto answer = server.tokens.check(self->token_key(), token);
@@ -315,7 +316,9 @@ class Connection final : public std::enable_shared_from_this<Connection> {
       const auto answer =
           foxglove::answer_publish(request, server.sender.directory(), server.options.policy,
                                    self->token_, sent, check_token);
-      asio::post(server.io, [self, answer, ids = std::move(sent.commands)] {
+      // The connection's last reference goes on the I/O thread, which owns the server's set of
+      // clients (its destructor leaves it), as the page's sessions do.
+      asio::post(server.io, [self = std::move(self), answer, ids = std::move(sent.commands)] {
         self->session.outbox.post_status(foxglove::status(answer.level, answer.message));
         self->write_next();
         self->server_.sender.answered(ids, {});
