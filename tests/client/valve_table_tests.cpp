@@ -39,6 +39,22 @@ TEST(ValvectlTable, TelemetryBeforePresenceStaysHiddenUntilThePresenceArrives) {
   EXPECT_EQ(table.row(1)->gateway, "gw");
 }
 
+// A best-effort subject's catch-up reader delivers each writer's last sample as it matches, which
+// may be older than what the stream has brought since.
+TEST(ValvectlTable, AWritersLastSampleFillsOnlyWhatNothingReceivedLaterHas) {
+  ValveTable table;
+  table.on_presence(presence(1, true));
+  table.on_telemetry_history(1, codec::Position{10.5}, 100);
+  EXPECT_EQ(table.row(1)->position_degrees(), 10.5) << "nothing there yet";
+  table.on_telemetry(1, codec::Position{20.5}, 300);
+  table.on_telemetry_history(1, codec::Position{15.5}, 200);
+  EXPECT_EQ(table.row(1)->position_degrees(), 20.5) << "an older sample replaced a newer one";
+  table.on_telemetry_history(1, codec::Position{25.5}, 400);
+  EXPECT_EQ(table.row(1)->position_degrees(), 25.5);
+  table.on_telemetry_history(1, codec::Temperature{31, 31}, 50);
+  EXPECT_EQ(table.row(1)->temperature_c(), 31) << "another subject is judged on its own";
+}
+
 TEST(ValvectlTable, RowsAreSortedBySerialAndCountOnline) {
   ValveTable table;
   table.on_presence(presence(3, true));

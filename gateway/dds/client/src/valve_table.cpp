@@ -79,6 +79,16 @@ void ValveTable::on_telemetry(std::uint32_t serial, const codec::FromValveMessag
   changed(found);
 }
 
+void ValveTable::on_telemetry_history(std::uint32_t serial, const codec::FromValveMessage& message,
+                                      std::uint64_t received_ns) {
+  if (const auto row = rows_.find(serial); row != rows_.end()) {
+    const auto& telemetry = row->second.row.telemetry;
+    const auto it = telemetry.find(codec::subject(message));
+    if (it != telemetry.end() && it->second.received_ns >= received_ns) return;
+  }
+  on_telemetry(serial, message, received_ns);
+}
+
 void ValveTable::on_error(std::uint32_t serial, ErrorKind kind) {
   Entry& found = entry(serial);
   if (found.row.errors.insert(kind).second) changed(found);

@@ -1,5 +1,6 @@
 #include "teejet/client/valve_view.hpp"
 
+#include <algorithm>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <utility>
@@ -17,20 +18,16 @@ using ReturnCode = eprosima::fastrtps::types::ReturnCode_t;
 
 ValveView::Reader ValveView::reader_of(const std::string& topic_name,
                                        Result<eprosima::fastdds::dds::Topic*> topic,
-                                       const std::set<std::uint32_t>& serials) {
+                                       const std::set<std::uint32_t>& serials,
+                                       const eprosima::fastdds::dds::DataReaderQos& qos) {
   if (failure_) return nullptr;
   if (!topic) {
     failure_ = topic.error();
     return nullptr;
   }
-  // No listener yet: create() attaches them once handlers_ is complete. Gateway status follows
-  // its writers' liveliness: a gateway that dies without a word is shown lost.
-  auto reader =
-      !serials.empty()
-          ? participant_.reader_of_serials(*topic, serials, dds::topics::state_reader_qos())
-          : participant_.reader(*topic, topic_name == dds::topics::kGatewayStatus
-                                            ? dds::topics::liveliness_reader_qos()
-                                            : dds::topics::state_reader_qos());
+  // No listener yet: create() attaches them once handlers_ is complete.
+  auto reader = !serials.empty() ? participant_.reader_of_serials(*topic, serials, qos)
+                                 : participant_.reader(*topic, qos);
   if (!reader) {
     failure_ = Error{reader.error().code, reader.error().reason + " (" + topic_name + ")"};
     return nullptr;
@@ -39,14 +36,8 @@ ValveView::Reader ValveView::reader_of(const std::string& topic_name,
 }
 
 template <class Sample>
-ValveView::Reader ValveView::subscribe(
-    std::function<void(const Sample&, const SampleInfo&)> on_sample,
-    const std::set<std::uint32_t>& serials) {
-  Reader reader = reader_of(dds::topics::topic_name<Sample>(),
-                            dds::topics::topic_of<Sample>(participant_), serials);
-  if (reader == nullptr) return nullptr;
-  std::unique_lock handlers_lock(handlers_mutex_);
-  handlers_.emplace(reader, [this, on_sample = std::move(on_sample)](Reader from) {
+ValveView::Handler ValveView::taking(OnSample<Sample> on_sample) {
+  return [this, on_sample = std::move(on_sample)](Reader from) {
     // Take first, then lock: Fast DDS holds the reader's lock while it calls the listener, so
     // taking with mutex_ held would invert the lock order against a listener thread.
     std::vector<std::pair<Sample, SampleInfo>> samples;
@@ -59,7 +50,18 @@ ValveView::Reader ValveView::subscribe(
     std::lock_guard lock(mutex_);
     for (const auto& [taken, taken_info] : samples) on_sample(taken, taken_info);
     changed_.notify_all();
-  });
+  };
+}
+
+template <class Sample>
+ValveView::Reader ValveView::subscribe(OnSample<Sample> on_sample,
+                                       const std::set<std::uint32_t>& serials,
+                                       const eprosima::fastdds::dds::DataReaderQos& qos) {
+  Reader reader = reader_of(dds::topics::topic_name<Sample>(),
+                            dds::topics::topic_of<Sample>(participant_), serials, qos);
+  if (reader == nullptr) return nullptr;
+  std::unique_lock handlers_lock(handlers_mutex_);
+  handlers_.emplace(reader, taking<Sample>(std::move(on_sample)));
   return reader;
 }
 
@@ -78,10 +80,10 @@ void ValveView::listen_to(const std::vector<Reader>& readers) {
   // status also tells when a gateway's writers lost their liveliness or left.
   for (const Reader reader : readers) {
     using eprosima::fastdds::dds::StatusMask;
-    const auto mask = reader == gateway_status_reader_ ? StatusMask::data_available()
-                                                             << StatusMask::liveliness_changed()
-                                                             << StatusMask::subscription_matched()
-                                                       : StatusMask::data_available();
+    const auto mask = reader == gateway_status_reader_
+                          ? StatusMask::data_available() << StatusMask::liveliness_changed()
+                                                         << StatusMask::subscription_matched()
+                          : StatusMask::data_available() << StatusMask::subscription_matched();
     reader->set_listener(this, mask);
   }
   // Without handlers_mutex_ held: taking locks the reader, and a listener thread holding that
@@ -95,7 +97,7 @@ void ValveView::listen_to(const std::vector<Reader>& readers) {
 }
 
 Status ValveView::follow(const ViewTopics& more) {
-  ViewTopics fresh{.everything = false, .serials = more.serials};
+  ViewTopics fresh{.everything = false, .serials = more.serials, .best_effort = more.best_effort};
   for (const auto& subject : more.telemetry) {
     if (!telemetry_followed_.contains(subject)) fresh.telemetry.insert(subject);
   }
@@ -124,10 +126,13 @@ ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
       subscribe<ValvePresence>([this](const ValvePresence& sample, const SampleInfo& info) {
         table_.on_presence(sample, dds::participant_of(info.publication_handle));
       });
-  gateway_status_reader_ =
-      subscribe<GatewayStatus>([this](const GatewayStatus& sample, const SampleInfo& info) {
+  // Gateway status follows its writers' liveliness: a gateway that dies without a word is
+  // shown lost.
+  gateway_status_reader_ = subscribe<GatewayStatus>(
+      [this](const GatewayStatus& sample, const SampleInfo& info) {
         table_.on_gateway_status(sample, dds::participant_of(info.publication_handle));
-      });
+      },
+      {}, dds::topics::liveliness_reader_qos());
   subscribe<ValveLocation>([this](const ValveLocation& sample, const SampleInfo& info) {
     table_.on_location(sample, dds::participant_of(info.publication_handle));
   });
@@ -136,7 +141,8 @@ ValveView::ValveView(dds::Participant& participant, const ViewTopics& topics)
 
   // Errors are keyed by (serial, kind) and disposed on Clear Errors: they need the instance.
   if (Reader errors = reader_of(dds::topics::kError,
-                                participant_.topic<ValveErrorPubSubType>(dds::topics::kError))) {
+                                participant_.topic<ValveErrorPubSubType>(dds::topics::kError), {},
+                                dds::topics::state_reader_qos())) {
     std::unique_lock handlers_lock(handlers_mutex_);
     handlers_.emplace(errors, [this](Reader from) { take_errors(from); });
   }
@@ -154,15 +160,48 @@ std::vector<ValveView::Reader> ValveView::subscribe_telemetry(
           !topics.telemetry.contains(dds::topics::telemetry_subject<Sample>())) {
         return;
       }
-      telemetry_followed_.insert(dds::topics::telemetry_subject<Sample>());
-      if (Reader reader = subscribe<Sample>(
-              [this](const Sample& sample, const SampleInfo&) {
-                table_.on_telemetry(sample.serial(), dds::from_sample(sample),
-                                    sample.received_ns());
-              },
-              topics.everything ? std::set<std::uint32_t>{} : topics.serials)) {
-        made.push_back(reader);
+      const std::string subject = dds::topics::telemetry_subject<Sample>();
+      telemetry_followed_.insert(subject);
+      const auto serials = topics.everything ? std::set<std::uint32_t>{} : topics.serials;
+      if (!topics.best_effort.contains(subject)) {
+        if (Reader reader = subscribe<Sample>(
+                [this](const Sample& sample, const SampleInfo&) {
+                  table_.on_telemetry(sample.serial(), dds::from_sample(sample),
+                                      sample.received_ns());
+                },
+                serials)) {
+          made.push_back(reader);
+        }
+        return;
       }
+      auto stream_qos = dds::topics::state_reader_qos();
+      stream_qos.reliability().kind = eprosima::fastdds::dds::BEST_EFFORT_RELIABILITY_QOS;
+      stream_qos.durability().kind = eprosima::fastdds::dds::VOLATILE_DURABILITY_QOS;
+      Reader stream = subscribe<Sample>(
+          [this](const Sample& sample, const SampleInfo&) {
+            table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
+          },
+          serials, stream_qos);
+      if (stream == nullptr) return;
+      made.push_back(stream);
+      // Made on the catch-up thread, through the stream's own topic (filtered or not): the
+      // participant's maps of topics are this thread's.
+      auto make_catch_up = [this, topic = const_cast<eprosima::fastdds::dds::TopicDescription*>(
+                                      stream->get_topicdescription())]() -> Reader {
+        auto reader = participant_.reader(topic, dds::topics::state_reader_qos());
+        if (!reader) return nullptr;
+        std::unique_lock handlers_lock(handlers_mutex_);
+        handlers_.emplace(*reader, taking<Sample>([this](const Sample& sample, const SampleInfo&) {
+          table_.on_telemetry_history(sample.serial(), dds::from_sample(sample),
+                                      sample.received_ns());
+        }));
+        return *reader;
+      };
+      // Wanted at once: writers may match the stream before it has its listener.
+      std::lock_guard lock(streams_mutex_);
+      streams_[stream] = {.make_catch_up = std::move(make_catch_up), .wanted = true};
+      streams_changed_.notify_all();
+      if (!catch_up_thread_.joinable()) catch_up_thread_ = std::thread([this] { catch_up(); });
     }
   };
   (one(std::type_identity<Samples>{}), ...);
@@ -170,6 +209,12 @@ std::vector<ValveView::Reader> ValveView::subscribe_telemetry(
 }
 
 ValveView::~ValveView() {
+  {
+    std::lock_guard lock(streams_mutex_);
+    stopping_ = true;
+  }
+  streams_changed_.notify_all();
+  if (catch_up_thread_.joinable()) catch_up_thread_.join();
   // Delete the readers while this listener still exists: the participant outlives the view.
   for (const auto& [reader, handler] : handlers_) participant_.delete_reader(reader);
 }
@@ -198,6 +243,53 @@ void ValveView::take_errors(Reader reader) {
   changed_.notify_all();
 }
 
+void ValveView::catch_up() {
+  std::unique_lock lock(streams_mutex_);
+  while (!stopping_) {
+    const auto now = std::chrono::steady_clock::now();
+    auto next = now + std::chrono::hours(1);
+    std::vector<Stream*> to_make;
+    std::vector<Reader> to_delete;
+    for (auto& [stream_reader, stream] : streams_) {
+      if (stream.catch_up == nullptr) {
+        if (stream.wanted && stream.make_catch_up) to_make.push_back(&stream);
+      } else if (now >= stream.last_match + kCatchUpQuiet) {
+        to_delete.push_back(std::exchange(stream.catch_up, nullptr));
+      } else {
+        next = std::min(next, stream.last_match + kCatchUpQuiet);
+      }
+    }
+    if (to_make.empty() && to_delete.empty()) {
+      streams_changed_.wait_until(lock, next);
+      continue;
+    }
+    // Without streams_mutex_: a listener thread holds its reader's lock while it takes it.
+    lock.unlock();
+    std::vector<std::pair<Stream*, Reader>> made;
+    for (Stream* stream : to_make) made.emplace_back(stream, stream->make_catch_up());
+    for (const Reader reader : to_delete) {
+      {
+        std::unique_lock handlers_lock(handlers_mutex_);
+        handlers_.erase(reader);
+      }
+      participant_.delete_reader(reader);
+    }
+    std::vector<Reader> listening;
+    lock.lock();
+    // Every writer that had matched the stream is there to match its catch-up reader too.
+    for (auto [stream, reader] : made) {
+      stream->wanted = false;
+      stream->catch_up = reader;
+      stream->last_match = std::chrono::steady_clock::now();
+      if (reader != nullptr) listening.push_back(reader);
+    }
+    if (listening.empty()) continue;
+    lock.unlock();
+    listen_to(listening);
+    lock.lock();
+  }
+}
+
 void ValveView::on_data_available(DataReader* reader) {
   // Held while the handler runs: follow() adds to the map, never while holding mutex_.
   std::shared_lock lock(handlers_mutex_);
@@ -217,8 +309,21 @@ void ValveView::on_liveliness_changed(
 }
 
 void ValveView::on_subscription_matched(
-    DataReader* /*reader*/, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
+    DataReader* reader, const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) {
   if (status.current_count_change == 0) return;
+  if (reader != gateway_status_reader_) {
+    if (status.current_count_change < 0) return;
+    std::lock_guard lock(streams_mutex_);
+    for (auto& [stream_reader, stream] : streams_) {
+      if (reader != stream_reader && reader != stream.catch_up) continue;
+      stream.last_match = std::chrono::steady_clock::now();
+      if (stream.catch_up == nullptr) {
+        stream.wanted = true;
+        streams_changed_.notify_all();
+      }
+    }
+    return;
+  }
   // A status writer that matches again belongs to a participant discovery found again: alive,
   // whatever its liveliness said before (Fast DDS may report none on a rematch).
   std::lock_guard lock(mutex_);

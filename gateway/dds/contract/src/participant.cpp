@@ -447,6 +447,15 @@ void Participant::delete_reader(DataReader* reader) {
   subscriber_->delete_datareader(reader);
 }
 
+std::size_t Participant::readers_of(const std::string& topic_name) const {
+  std::vector<DataReader*> readers;
+  subscriber_->get_datareaders(readers);
+  return static_cast<std::size_t>(
+      std::count_if(readers.begin(), readers.end(), [&topic_name](const DataReader* reader) {
+        return reader->get_topicdescription()->get_name() == topic_name;
+      }));
+}
+
 void Participant::delete_writer(DataWriter* writer) {
   if (writer == nullptr) return;
   empty_history(writer);

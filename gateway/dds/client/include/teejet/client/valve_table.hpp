@@ -115,6 +115,10 @@ class ValveTable {
   // Any telemetry message, kept as the latest of its subject.
   void on_telemetry(std::uint32_t serial, const codec::FromValveMessage& message,
                     std::uint64_t received_ns);
+  // A writer's last sample, delivered as it matched (ViewTopics::best_effort): kept only where
+  // the table holds nothing received later of its subject.
+  void on_telemetry_history(std::uint32_t serial, const codec::FromValveMessage& message,
+                            std::uint64_t received_ns);
   void on_error(std::uint32_t serial, ErrorKind kind);
   void on_error_cleared(std::uint32_t serial, ErrorKind kind);
   void on_gateway_status(const GatewayStatus& status, const std::string& participant = {});

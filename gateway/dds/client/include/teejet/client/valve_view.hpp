@@ -18,6 +18,7 @@
 #include <set>
 #include <shared_mutex>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
 #include <variant>
@@ -25,6 +26,7 @@
 
 #include "teejet/client/valve_table.hpp"
 #include "teejet/dds/participant.hpp"
+#include "teejet/dds/topics.hpp"
 
 namespace teejet::client {
 
@@ -41,6 +43,12 @@ struct ViewTopics {
   // With `telemetry`: only these valves' samples of it (empty: every valve's); the others are
   // dropped as they arrive (dds/serial_filter.hpp). Presence stays whole.
   std::set<std::uint32_t> serials;
+  // Of the telemetry followed, the subjects taken best effort ("position"): those the gateways
+  // resend on their own every poll, where a lost sample is replaced by the next one and
+  // acknowledging each costs more than it is worth. Each gateway's last sample of them still
+  // arrives as it appears: a reliable reader of the subject follows it until no writer has
+  // matched for kCatchUpQuiet, and fills only what the stream has not given anything newer for.
+  std::set<std::string> best_effort;
 };
 
 class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
@@ -49,6 +57,8 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   static Result<std::unique_ptr<ValveView>> create(dds::Participant& participant,
                                                    const ViewTopics& topics = {});
   ~ValveView() override;
+  // How long a best-effort subject's reliable reader stays after its last writer matched.
+  static constexpr std::chrono::seconds kCatchUpQuiet{3};
   ValveView(const ValveView&) = delete;
   ValveView& operator=(const ValveView&) = delete;
 
@@ -90,9 +100,10 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   void on_liveliness_changed(
       eprosima::fastdds::dds::DataReader* reader,
       const eprosima::fastdds::dds::LivelinessChangedStatus& status) override;
-  // Gateway status only: a writer that goes before its first liveliness assertion reached this
+  // Gateway status: a writer that goes before its first liveliness assertion reached this
   // reader changes no liveliness (Fast DDS never counted it alive); its unmatch, when its
-  // participant's lease ends, marks it lost instead, and a match marks it back.
+  // participant's lease ends, marks it lost instead, and a match marks it back. A best-effort
+  // subject's readers: a new writer wants its last samples caught up.
   void on_subscription_matched(
       eprosima::fastdds::dds::DataReader* reader,
       const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override;
@@ -101,13 +112,19 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   using Reader = eprosima::fastdds::dds::DataReader*;
   using Handler = std::function<void(Reader)>;
   ValveView(dds::Participant& participant, const ViewTopics& topics);
+  template <class Sample>
+  using OnSample = std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)>;
   // Registers a reader of Sample's topic; nullptr (and failure_ set) when DDS refuses.
   template <class Sample>
   Reader subscribe(
-      std::function<void(const Sample&, const eprosima::fastdds::dds::SampleInfo&)> on_sample,
-      const std::set<std::uint32_t>& serials = {});
+      OnSample<Sample> on_sample, const std::set<std::uint32_t>& serials = {},
+      const eprosima::fastdds::dds::DataReaderQos& qos = dds::topics::state_reader_qos());
+  // Takes what `from` holds and hands it to `on_sample` with mutex_ held.
+  template <class Sample>
+  Handler taking(OnSample<Sample> on_sample);
   Reader reader_of(const std::string& topic_name, Result<eprosima::fastdds::dds::Topic*> topic,
-                   const std::set<std::uint32_t>& serials = {});
+                   const std::set<std::uint32_t>& serials,
+                   const eprosima::fastdds::dds::DataReaderQos& qos);
   // The readers it made (those DDS refused set failure_).
   template <class... Samples>
   std::vector<Reader> subscribe_telemetry(std::type_identity<std::variant<Samples...>>,
@@ -115,6 +132,9 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   // Gives `readers` this view as their listener and takes what arrived before it.
   void listen_to(const std::vector<Reader>& readers);
   void take_errors(Reader reader);
+  // The catch-up thread: makes a reliable reader of each best-effort subject a new writer
+  // matched, and deletes it once no writer has matched for kCatchUpQuiet.
+  void catch_up();
   // Fast DDS calls listeners with its reader's lock held and takes that lock to report the
   // matched count: asking it with mutex_ held would invert the lock order, so this runs first
   // and stores the count in the table.
@@ -135,6 +155,18 @@ class ValveView final : public eprosima::fastdds::dds::DataReaderListener {
   // Disposed samples carry no data: the instance handle says which error was cleared.
   std::map<eprosima::fastrtps::rtps::InstanceHandle_t, std::pair<std::uint32_t, ErrorKind>>
       error_instances_;
+
+  struct Stream {
+    std::function<Reader()> make_catch_up;  // nullptr when DDS refused
+    Reader catch_up = nullptr;
+    bool wanted = false;  // a writer matched the stream while it had no catch-up reader
+    std::chrono::steady_clock::time_point last_match;
+  };
+  std::mutex streams_mutex_;
+  std::condition_variable streams_changed_;
+  std::map<Reader, Stream> streams_;  // by their best-effort reader
+  bool stopping_ = false;
+  std::thread catch_up_thread_;  // started with the first best-effort subject
 };
 
 }  // namespace teejet::client

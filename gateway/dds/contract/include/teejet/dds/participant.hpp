@@ -172,6 +172,8 @@ class Participant {
   // Delete a reader or writer made here (nullptr: nothing); after delete_reader returns no
   // callback reaches its listener.
   void delete_reader(eprosima::fastdds::dds::DataReader* reader);
+  // How many readers of `topic_name` this participant has.
+  std::size_t readers_of(const std::string& topic_name) const;
   void delete_writer(eprosima::fastdds::dds::DataWriter* writer);
 
   eprosima::fastdds::dds::DomainParticipant* get() const { return participant_; }
