@@ -13,6 +13,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <system_error>
 #include <thread>
@@ -184,6 +185,12 @@ Result<std::filesystem::path> find_page(const Options& options) {
   return web::find_www(options.www, exe.parent_path());
 }
 
+// The telemetry the gateways resend every second or faster by default (`poll:` in
+// config/gateway.example.yaml): the page takes it best effort, as a stream. Acknowledging each of
+// 256 valves' samples cost teejet-web about a sixth of its CPU (docs/performance.md, "Scale").
+const std::set<std::string> kStreamedTelemetry = {
+    "position", "temperature", "voltage", "current", "degrees_per_second", "speed_direction"};
+
 // Declared in this order so that the view goes before the participant it reads through.
 struct Dds {
   std::unique_ptr<teejet::dds::Participant> participant;
@@ -212,7 +219,7 @@ Result<Dds> join_dds(const Options& options) {
       {.domain = options.domain, .profile_file = options.profile_file, .name = "teejet-web"});
   if (!participant) return participant.error();
   auto watchdog = watch_event_thread(**participant);
-  auto view = client::ValveView::create(**participant);
+  auto view = client::ValveView::create(**participant, {.best_effort = kStreamedTelemetry});
   if (!view) return view.error();
   return Dds{std::move(*participant), std::move(watchdog), std::move(*view)};
 }
