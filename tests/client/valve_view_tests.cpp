@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <vector>
 
 #include "support/dds_peer.hpp"
 #include "support/eventually.hpp"
@@ -131,10 +132,12 @@ TEST(ValveView, AViewOfSomeTelemetryNeitherSubscribesToNorShowsTheRest) {
 constexpr std::uint32_t kOwn = 0x0012'3456;    // the valve a view names
 constexpr std::uint32_t kOther = 0x0065'4321;  // and one it does not
 
-// A gateway played by hand that publishes the presence and position of kOwn and kOther.
+// A gateway played by hand that publishes the presence and position of its valves (kOwn and
+// kOther unless told).
 class PositionGateway {
  public:
-  PositionGateway() {
+  explicit PositionGateway(std::vector<std::uint32_t> serials = {kOwn, kOther})
+      : serials_(std::move(serials)) {
     auto presence_topic = dds::topics::topic_of<ValvePresence>(peer_.participant());
     auto position_topic = dds::topics::topic_of<ValvePosition>(peer_.participant());
     if (!presence_topic || !position_topic) return;
@@ -147,20 +150,22 @@ class PositionGateway {
   }
   bool ready() const { return presence_writer_ != nullptr && position_writer != nullptr; }
   bool announce() {
-    for (const std::uint32_t serial : {kOwn, kOther}) {
+    for (const std::uint32_t serial : serials_) {
       ValvePresence online = presence(serial, true);
       if (!presence_writer_->write(&online)) return false;
     }
     return true;
   }
-  // kOwn at `own` degrees, kOther 10 degrees further.
-  bool write_positions(float own) {
+  // The first valve at `first` degrees, each next one 10 degrees further.
+  bool write_positions(float first) {
     bool written = true;
-    for (const std::uint32_t serial : {kOwn, kOther}) {
+    float degrees = first;
+    for (const std::uint32_t serial : serials_) {
       ValvePosition position;
       position.serial(serial);
-      position.degrees(serial == kOwn ? own : own + 10.0F);
+      position.degrees(degrees);
       written = position_writer->write(&position) && written;
+      degrees += 10.0F;
     }
     return written;
   }
@@ -168,6 +173,7 @@ class PositionGateway {
   eprosima::fastdds::dds::DataWriter* position_writer = nullptr;
 
  private:
+  std::vector<std::uint32_t> serials_;
   DdsPeer peer_{test_domain(), "gateway-by-hand"};
   eprosima::fastdds::dds::DataWriter* presence_writer_ = nullptr;
 };
@@ -286,21 +292,10 @@ TEST(ValveView, ABestEffortSubjectGetsEachNewGatewaysLastSampleAndThenItsStream)
 
   // A gateway that comes later is caught up too.
   constexpr std::uint32_t kLater = 0x00AB'CDEF;
-  DdsPeer later(test_domain(), "later-gateway");
-  auto presence_topic = dds::topics::topic_of<ValvePresence>(later.participant());
-  auto position_topic = dds::topics::topic_of<ValvePosition>(later.participant());
-  ASSERT_TRUE(presence_topic && position_topic);
-  auto presence_writer =
-      later.participant().writer(*presence_topic, dds::topics::state_writer_qos());
-  auto position_writer =
-      later.participant().writer(*position_topic, dds::topics::state_writer_qos());
-  ASSERT_TRUE(presence_writer && position_writer);
-  ValvePresence online = presence(kLater, true);
-  ValvePosition position;
-  position.serial(kLater);
-  position.degrees(33.5F);
-  ASSERT_TRUE((*presence_writer)->write(&online));
-  ASSERT_TRUE((*position_writer)->write(&position));
+  PositionGateway later({kLater});
+  ASSERT_TRUE(later.ready());
+  ASSERT_TRUE(later.announce());
+  ASSERT_TRUE(later.write_positions(33.5F));
   ASSERT_TRUE((*view)->wait_until(
       [](const ValveTable& table) {
         return table.row(kLater) && table.row(kLater)->position_degrees() == 33.5;

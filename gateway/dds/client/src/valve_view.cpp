@@ -156,50 +156,36 @@ std::vector<ValveView::Reader> ValveView::subscribe_telemetry(
   const auto one = [this, &topics, &made](auto identity) {
     using Sample = typename decltype(identity)::type;
     if constexpr (!std::is_same_v<Sample, ValveError>) {
-      if (!topics.everything &&
-          !topics.telemetry.contains(dds::topics::telemetry_subject<Sample>())) {
-        return;
-      }
       const std::string subject = dds::topics::telemetry_subject<Sample>();
+      if (!topics.everything && !topics.telemetry.contains(subject)) return;
       telemetry_followed_.insert(subject);
       const auto serials = topics.everything ? std::set<std::uint32_t>{} : topics.serials;
-      if (!topics.best_effort.contains(subject)) {
-        if (Reader reader = subscribe<Sample>(
-                [this](const Sample& sample, const SampleInfo&) {
-                  table_.on_telemetry(sample.serial(), dds::from_sample(sample),
-                                      sample.received_ns());
-                },
-                serials)) {
-          made.push_back(reader);
-        }
-        return;
-      }
-      auto stream_qos = dds::topics::state_reader_qos();
-      stream_qos.reliability().kind = eprosima::fastdds::dds::BEST_EFFORT_RELIABILITY_QOS;
-      stream_qos.durability().kind = eprosima::fastdds::dds::VOLATILE_DURABILITY_QOS;
-      Reader stream = subscribe<Sample>(
+      const bool stream = topics.best_effort.contains(subject);
+      Reader reader = subscribe<Sample>(
           [this](const Sample& sample, const SampleInfo&) {
             table_.on_telemetry(sample.serial(), dds::from_sample(sample), sample.received_ns());
           },
-          serials, stream_qos);
-      if (stream == nullptr) return;
-      made.push_back(stream);
+          serials, stream ? dds::topics::stream_reader_qos() : dds::topics::state_reader_qos());
+      if (reader == nullptr) return;
+      made.push_back(reader);
+      if (!stream) return;
       // Made on the catch-up thread, through the stream's own topic (filtered or not): the
       // participant's maps of topics are this thread's.
       auto make_catch_up = [this, topic = const_cast<eprosima::fastdds::dds::TopicDescription*>(
-                                      stream->get_topicdescription())]() -> Reader {
-        auto reader = participant_.reader(topic, dds::topics::state_reader_qos());
-        if (!reader) return nullptr;
+                                      reader->get_topicdescription())]() -> Reader {
+        auto catch_up = participant_.reader(topic, dds::topics::state_reader_qos());
+        if (!catch_up) return nullptr;
         std::unique_lock handlers_lock(handlers_mutex_);
-        handlers_.emplace(*reader, taking<Sample>([this](const Sample& sample, const SampleInfo&) {
-          table_.on_telemetry_history(sample.serial(), dds::from_sample(sample),
-                                      sample.received_ns());
-        }));
-        return *reader;
+        handlers_.emplace(*catch_up,
+                          taking<Sample>([this](const Sample& sample, const SampleInfo&) {
+                            table_.on_telemetry_history(sample.serial(), dds::from_sample(sample),
+                                                        sample.received_ns());
+                          }));
+        return *catch_up;
       };
       // Wanted at once: writers may match the stream before it has its listener.
       std::lock_guard lock(streams_mutex_);
-      streams_[stream] = {.make_catch_up = std::move(make_catch_up), .wanted = true};
+      streams_[reader] = {.make_catch_up = std::move(make_catch_up), .wanted = true};
       streams_changed_.notify_all();
       if (!catch_up_thread_.joinable()) catch_up_thread_ = std::thread([this] { catch_up(); });
     }

@@ -92,6 +92,13 @@ DataReaderQos liveliness_reader_qos() {
   return qos;
 }
 
+DataReaderQos stream_reader_qos() {
+  auto qos = state_reader_qos();
+  qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = VOLATILE_DURABILITY_QOS;
+  return qos;
+}
+
 DataWriterQos command_writer_qos() {
   auto qos = reliable<DataWriterQos>(VOLATILE_DURABILITY_QOS, KEEP_ALL_HISTORY_QOS, 1);
   qos.liveliness().kind = AUTOMATIC_LIVELINESS_QOS;

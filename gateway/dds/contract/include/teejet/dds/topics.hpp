@@ -101,6 +101,10 @@ eprosima::fastdds::dds::DataReaderQos state_reader_qos();
 // Fast DDS watches a writer's liveliness only for a reader that asks for a finite lease. A
 // writer offering none (another vendor's, an older gateway) does not match it.
 eprosima::fastdds::dds::DataReaderQos liveliness_reader_qos();
+// state_reader_qos() BEST_EFFORT and VOLATILE: for state its writers resend every poll, where a
+// lost sample is replaced by the next; no writer history reaches it (docs/topics.md, "A stream
+// of state").
+eprosima::fastdds::dds::DataReaderQos stream_reader_qos();
 
 // Commands (and layout changes): RELIABLE, VOLATILE, KEEP_ALL (up to 256 queued per valve, writers
 // heartbeat every 100 ms so acknowledgements free them promptly), so no command is lost; automatic
